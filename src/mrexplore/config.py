@@ -1,0 +1,184 @@
+"""Typed, frozen configuration: one dataclass per part, each field with its unit and range.
+
+Every dataclass validates itself on construction and raises :class:`~mrexplore.types.MrExploreError`
+with the parameter name, the value received and the allowed range, e.g.
+``robots must be >= 1, got 0``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from mrexplore.types import MrExploreError
+
+__all__ = [
+    "MapConfig",
+    "SensorConfig",
+    "MotionConfig",
+    "SimConfig",
+    "RewardConfig",
+    "PreprocessConfig",
+    "GlobalPlanningConfig",
+    "MissionConfig",
+    "config_to_dict",
+]
+
+
+def _require(ok: bool, name: str, rule: str, value: object) -> None:
+    if not ok:
+        raise MrExploreError(f"{name} must be {rule}, got {value!r}")
+
+
+@dataclass(frozen=True)
+class MapConfig:
+    """How a map file becomes a ground-truth grid."""
+
+    resolution_m: float = 0.05
+    """Working cell size, metres per cell, > 0 (paper: 0.05)."""
+    pixel_size_m: float | None = None
+    """Metres per pixel of an image with no YAML, > 0; None: 0.01 for grayscale, 0.1 for DungeonMaps."""
+
+    def __post_init__(self) -> None:
+        _require(self.resolution_m > 0, "resolution", "> 0 metres", self.resolution_m)
+        if self.pixel_size_m is not None:
+            _require(self.pixel_size_m > 0, "pixel-size", "> 0 metres", self.pixel_size_m)
+
+
+@dataclass(frozen=True)
+class SensorConfig:
+    """360° 2D LiDAR and the log-odds belief it updates (paper eq. 1)."""
+
+    range_m: float = 6.0
+    """Maximum range, metres, > 0 (paper: 6 m)."""
+    ray_oversampling: float = 1.5
+    """Rays per cell of circumference at full range, >= 1; 1.5 leaves no gaps at full range."""
+    p_hit: float = 0.7
+    """P(occupied | beam ends in cell), in (0.5, 1) (OctoMap's default)."""
+    p_miss: float = 0.4
+    """P(occupied | beam passes through cell), in (0, 0.5) (OctoMap's default)."""
+    p_clamp_min: float = 0.12
+    """Lower clamp of the occupancy probability, in (0, 0.5) (OctoMap's default)."""
+    p_clamp_max: float = 0.97
+    """Upper clamp of the occupancy probability, in (0.5, 1) (OctoMap's default)."""
+    p_occupied: float = 0.5
+    """An observed cell is occupied when its probability exceeds this, in (0, 1); else free."""
+    range_noise_m: float = 0.0
+    """Standard deviation of Gaussian range noise, metres, >= 0 (0: noiseless)."""
+
+    def __post_init__(self) -> None:
+        _require(self.range_m > 0, "range_m", "> 0 metres", self.range_m)
+        _require(self.ray_oversampling >= 1, "ray_oversampling", ">= 1", self.ray_oversampling)
+        _require(0.5 < self.p_hit < 1, "p_hit", "in (0.5, 1)", self.p_hit)
+        _require(0 < self.p_miss < 0.5, "p_miss", "in (0, 0.5)", self.p_miss)
+        _require(0 < self.p_clamp_min < 0.5, "p_clamp_min", "in (0, 0.5)", self.p_clamp_min)
+        _require(0.5 < self.p_clamp_max < 1, "p_clamp_max", "in (0.5, 1)", self.p_clamp_max)
+        _require(0 < self.p_occupied < 1, "p_occupied", "in (0, 1)", self.p_occupied)
+        _require(self.range_noise_m >= 0, "range_noise_m", ">= 0 metres", self.range_noise_m)
+
+
+@dataclass(frozen=True)
+class MotionConfig:
+    """How far a robot drives per simulation step."""
+
+    step_m: float = 0.1
+    """Distance driven per step along the path, metres, > 0 (the mission's clock)."""
+
+    def __post_init__(self) -> None:
+        _require(self.step_m > 0, "step_m", "> 0 metres", self.step_m)
+
+
+@dataclass(frozen=True)
+class RewardConfig:
+    """Team reward of paper eq. 9: R = R_time + lambda * R_area."""
+
+    time_reward: float = -1.0
+    """R_time, the fixed reward per step, <= 0."""
+    area_weight: float = 2.0
+    """lambda, weight of newly known explorable area in m^2, >= 0 (paper: 2)."""
+
+    def __post_init__(self) -> None:
+        _require(self.time_reward <= 0, "time_reward", "<= 0", self.time_reward)
+        _require(self.area_weight >= 0, "area_weight", ">= 0", self.area_weight)
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """The multi-robot simulator."""
+
+    robots: int = 3
+    """Team size, >= 1 (paper: 3)."""
+    start_spread_m: float = 1.0
+    """Drawn starts lie within this geodesic distance of the first robot, metres, >= 0."""
+    sensor: SensorConfig = field(default_factory=SensorConfig)
+    motion: MotionConfig = field(default_factory=MotionConfig)
+    reward: RewardConfig = field(default_factory=RewardConfig)
+
+    def __post_init__(self) -> None:
+        _require(isinstance(self.robots, int) and self.robots >= 1, "robots", ">= 1", self.robots)
+        _require(self.start_spread_m >= 0, "start_spread_m", ">= 0 metres", self.start_spread_m)
+
+
+@dataclass(frozen=True)
+class PreprocessConfig:
+    """Layer 1: closing, frontier detection and Mean-Shift clustering (paper IV-A)."""
+
+    closing_size_cells: int = 3
+    """Side of the square structuring element of the closing, odd, >= 1 (1: no closing)."""
+    min_cluster_size: int = 2
+    """Clusters with fewer members are dropped (paper: 2), >= 1."""
+    bandwidth_percentile: float = 15.0
+    """Mean-Shift bandwidth as this percentile of pairwise frontier distances (paper: 15), in (0, 100]."""
+    bandwidth_sample: int = 1000
+    """At most this many frontier cells (an even stride over them) enter the percentile, >= 2."""
+
+    def __post_init__(self) -> None:
+        _require(
+            self.closing_size_cells >= 1 and self.closing_size_cells % 2 == 1,
+            "closing_size_cells",
+            "odd and >= 1",
+            self.closing_size_cells,
+        )
+        _require(self.min_cluster_size >= 1, "min_cluster_size", ">= 1", self.min_cluster_size)
+        _require(
+            0 < self.bandwidth_percentile <= 100, "bandwidth_percentile", "in (0, 100]", self.bandwidth_percentile
+        )
+        _require(self.bandwidth_sample >= 2, "bandwidth_sample", ">= 2", self.bandwidth_sample)
+
+
+@dataclass(frozen=True)
+class GlobalPlanningConfig:
+    """Layer 2: weights of the classical assigners."""
+
+    distance_weight: float = 3.0
+    """explore_lite's potential_scale: cost per metre of geodesic distance, >= 0."""
+    size_weight: float = 1.0
+    """explore_lite's gain_scale: reward per metre of frontier (members x resolution), >= 0."""
+
+    def __post_init__(self) -> None:
+        _require(self.distance_weight >= 0, "distance_weight", ">= 0", self.distance_weight)
+        _require(self.size_weight >= 0, "size_weight", ">= 0", self.size_weight)
+
+
+@dataclass(frozen=True)
+class MissionConfig:
+    """One exploration mission: replanning events and the step budget."""
+
+    max_steps: int = 20000
+    """Step budget, >= 1; reaching it ends the mission as ``max_steps`` (truncated, never success)."""
+    replan_every_steps: int = 25
+    """A decision is taken at least this often, steps, >= 1."""
+
+    def __post_init__(self) -> None:
+        _require(self.max_steps >= 1, "max-steps", ">= 1", self.max_steps)
+        _require(self.replan_every_steps >= 1, "replan_every_steps", ">= 1", self.replan_every_steps)
+
+
+def config_to_dict(cfg: Any) -> dict[str, Any]:
+    """Plain ``dict`` of a config dataclass (nested), for result files and checkpoints."""
+    out = asdict(cfg)
+    for k, v in out.items():
+        if isinstance(v, float) and math.isinf(v):
+            out[k] = str(v)
+    return out

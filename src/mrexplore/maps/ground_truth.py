@@ -1,0 +1,98 @@
+"""The ground-truth occupancy grid a simulation runs on, and the outside/explorable-region rules."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from mrexplore.maps.frame import GridFrame
+from mrexplore.types import BoolGrid, GridRC, MrExploreError
+
+__all__ = ["GroundTruthMap", "mark_outside_as_obstacle", "free_components", "explorable_region"]
+
+_FOUR = ndimage.generate_binary_structure(2, 1)
+
+
+@dataclass(frozen=True)
+class GroundTruthMap:
+    """A ground-truth map: which cells are obstacles, and where the grid sits in the map frame.
+
+    Attributes
+    ----------
+    occupied:
+        ``(H, W) bool``; True for walls, unknown source cells and the outside.
+    frame:
+        Resolution and origin of the grid.
+    name:
+        Short name for reports (file stem or generator spec).
+    start_hint_rc:
+        A start cell the format itself gives (DungeonMaps' marker), or None.
+    """
+
+    occupied: BoolGrid
+    frame: GridFrame
+    name: str
+    start_hint_rc: GridRC | None = None
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (int(self.occupied.shape[0]), int(self.occupied.shape[1]))
+
+    @property
+    def resolution_m(self) -> float:
+        return self.frame.resolution_m
+
+
+def mark_outside_as_obstacle(occupied: BoolGrid) -> BoolGrid:
+    """Turn every free component that touches the grid border into obstacle.
+
+    Floor plans (KTH) draw the outside of the building as free space; it is not part of the building
+    and must neither be explored nor seen through, so it becomes obstacle.
+
+    Examples
+    --------
+    >>> occ = np.array([[0, 0, 0, 0, 0],
+    ...                 [0, 1, 1, 1, 0],
+    ...                 [0, 1, 0, 1, 0],
+    ...                 [0, 1, 1, 1, 0],
+    ...                 [0, 0, 0, 0, 0]], bool)
+    >>> (~mark_outside_as_obstacle(occ)).astype(int).sum()  # only the enclosed centre stays free
+    1
+    """
+    labels, _ = free_components(occupied)
+    border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    border = border[border > 0]
+    return occupied | np.isin(labels, border)
+
+
+def free_components(occupied: BoolGrid) -> tuple[np.ndarray, int]:
+    """Label 4-connected free components: ``((H, W) int32 labels, count)``; 0 marks obstacles.
+
+    4-connectivity matches the motion model: diagonal moves may not cut wall corners.
+    """
+    labels, n = ndimage.label(~occupied, structure=_FOUR)
+    return labels.astype(np.int32), int(n)
+
+
+def explorable_region(occupied: BoolGrid, starts_rc: np.ndarray) -> BoolGrid:
+    """Cells to be explored: the free space reachable from the starts plus the obstacles bounding it.
+
+    Bounding obstacles are those 4-adjacent to reachable free space: a wall cell touching the room only
+    diagonally is hidden behind its neighbours and no LiDAR ray can see it.
+
+    Parameters
+    ----------
+    occupied:
+        ``(H, W) bool`` ground truth.
+    starts_rc:
+        ``(n_robots, 2) int`` start cells, all free.
+    """
+    labels, _ = free_components(occupied)
+    ids = np.unique(labels[starts_rc[:, 0], starts_rc[:, 1]])
+    if np.any(ids == 0):
+        raise MrExploreError("a start lies inside a wall; pick a start on free space")
+    reach = np.isin(labels, ids)
+    bound = ndimage.binary_dilation(reach, structure=_FOUR) & occupied
+    return reach | bound

@@ -1,0 +1,210 @@
+"""Loading real map formats (ROS map_server, grayscale renders, HouseExpo JSON, DungeonMaps) by file type.
+
+Every loader returns a :class:`~mrexplore.maps.ground_truth.GroundTruthMap` at the working resolution with
+the outside (free space touching the border) turned into obstacle. Bad files raise
+:class:`~mrexplore.types.MrExploreError` with one line naming the file, the problem and the fix.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from PIL import Image, ImageDraw, UnidentifiedImageError
+
+from mrexplore.config import MapConfig
+from mrexplore.maps.floorplan import FloorplanSpec, generate_floorplan
+from mrexplore.maps.frame import GridFrame
+from mrexplore.maps.ground_truth import GroundTruthMap, mark_outside_as_obstacle
+from mrexplore.maps.resample import resample_obstacles
+from mrexplore.types import MrExploreError
+
+__all__ = ["load_map", "DEFAULT_MAP", "GRAYSCALE_PIXEL_M", "DUNGEON_PIXEL_M", "HOUSEEXPO_RASTER_M"]
+
+DEFAULT_MAP = "generated:0"
+"""The built-in map: a procedural floor plan (license-clean, made here from a seed)."""
+GRAYSCALE_PIXEL_M = 0.01
+"""Default metres per pixel of a grayscale image with no YAML (HouseExpo renders)."""
+DUNGEON_PIXEL_M = 0.1
+"""Default metres per pixel of a DungeonMaps PNG (the format has no scale of its own)."""
+HOUSEEXPO_RASTER_M = 0.01
+"""HouseExpo polygons are rasterised at 1 cm, like the dataset's own renders, then min-pooled."""
+_HOUSEEXPO_PAD_M = 0.25
+_GRAY_FREE_MIN = 128
+_DUNGEON_OBSTACLE = (127, 127, 127)
+_DUNGEON_FREE = (195, 195, 194)
+_DUNGEON_START = (255, 216, 0)
+_IMAGE_SUFFIXES = {".png", ".pgm", ".ppm", ".bmp", ".jpg", ".jpeg", ".tif", ".tiff", ".gif"}
+
+
+def load_map(spec: str | Path, cfg: MapConfig | None = None) -> GroundTruthMap:
+    """Load a ground-truth map from a file path or a generator spec.
+
+    Parameters
+    ----------
+    spec:
+        A ``.yaml`` (ROS map_server), an image (grayscale render or DungeonMaps RGB), a HouseExpo
+        ``.json``, or ``generated:SEED`` for the built-in procedural floor plan.
+    cfg:
+        Working resolution and pixel size of images without YAML.
+
+    Examples
+    --------
+    >>> m = load_map("generated:3", MapConfig(resolution_m=0.1))
+    >>> m.resolution_m, m.name
+    (0.1, 'generated:3')
+    """
+    cfg = cfg or MapConfig()
+    text = str(spec)
+    if text.startswith("generated"):
+        return _load_generated(text, cfg)
+    path = Path(text)
+    if not path.exists():
+        raise MrExploreError(f"map file not found: {path}; pass an existing map file with --map")
+    if path.is_dir():
+        raise MrExploreError(f"map path is a folder: {path}; pass one map file with --map")
+    suffix = path.suffix.lower()
+    if suffix in (".yaml", ".yml"):
+        return _load_ros_yaml(path, cfg)
+    if suffix == ".json":
+        return _load_houseexpo_json(path, cfg)
+    if suffix in _IMAGE_SUFFIXES:
+        sibling = path.with_suffix(".yaml")
+        if sibling.exists() and _yaml_image_name(sibling) == path.name:
+            return _load_ros_yaml(sibling, cfg)
+        return _load_image(path, cfg)
+    raise MrExploreError(
+        f"unsupported map format {suffix!r}: {path}; use a ROS .yaml, a .png/.pgm image or a HouseExpo .json"
+    )
+
+
+def _finish(obstacle: np.ndarray, frame: GridFrame, name: str, start_rc: tuple[int, int] | None) -> GroundTruthMap:
+    occupied = mark_outside_as_obstacle(obstacle)
+    if not (~occupied).any():
+        raise MrExploreError(
+            f"map {name} has no free space inside its border; check the file's free/occupied values"
+        )
+    if start_rc is not None and occupied[start_rc]:
+        start_rc = None
+    return GroundTruthMap(occupied=occupied, frame=frame, name=name, start_hint_rc=start_rc)
+
+
+def _load_generated(text: str, cfg: MapConfig) -> GroundTruthMap:
+    _, _, seed_text = text.partition(":")
+    try:
+        seed = int(seed_text) if seed_text else 0
+    except ValueError:
+        raise MrExploreError(f"bad generator spec {text!r}; write generated:SEED with an integer SEED") from None
+    obstacle = generate_floorplan(FloorplanSpec(seed=seed), cfg.resolution_m)
+    frame = GridFrame(obstacle.shape[0], obstacle.shape[1], cfg.resolution_m)
+    return _finish(obstacle, frame, f"generated:{seed}", None)
+
+
+def _read_yaml(path: Path) -> dict[str, Any]:
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise MrExploreError(f"malformed map YAML {path}: {reason}; give a ROS map_server YAML") from None
+    if not isinstance(data, dict):
+        raise MrExploreError(f"malformed map YAML {path}: not a mapping; give a ROS map_server YAML")
+    return data
+
+
+def _yaml_image_name(path: Path) -> str | None:
+    try:
+        data = _read_yaml(path)
+    except MrExploreError:
+        return None
+    image = data.get("image")
+    return Path(str(image)).name if image is not None else None
+
+
+def _open_image(path: Path) -> Image.Image:
+    try:
+        img = Image.open(path)
+        img.load()
+    except (OSError, UnidentifiedImageError, ValueError) as exc:
+        raise MrExploreError(f"cannot read map image {path}: {exc}; give a PNG/PGM map image") from None
+    return img
+
+
+def _load_ros_yaml(path: Path, cfg: MapConfig) -> GroundTruthMap:
+    data = _read_yaml(path)
+    for key in ("image", "resolution"):
+        if key not in data:
+            raise MrExploreError(f"malformed map YAML {path}: missing key {key!r}; give a ROS map_server YAML")
+    try:
+        resolution = float(data["resolution"])
+        origin = [float(v) for v in data.get("origin", [0.0, 0.0, 0.0])]
+        negate = int(data.get("negate", 0))
+        free_th = float(data.get("free_thresh", 0.196))
+    except (TypeError, ValueError) as exc:
+        raise MrExploreError(f"malformed map YAML {path}: {exc}; fix the numeric fields") from None
+    if resolution <= 0 or len(origin) < 2:
+        raise MrExploreError(f"malformed map YAML {path}: resolution must be > 0 and origin [x, y, yaw]")
+    img = _open_image(path.parent / str(data["image"]))
+    gray = np.asarray(img.convert("L"), dtype=np.float64)
+    # map_server: p = (255 - v) / 255 (negate 0); free below free_thresh, occupied above occupied_thresh,
+    # unknown between; only free counts as free here. Unknown ground truth counts as obstacle: nothing can be known behind it.
+    p = gray / 255.0 if negate else (255.0 - gray) / 255.0
+    obstacle = ~(p < free_th)
+    obstacle = resample_obstacles(obstacle, resolution, cfg.resolution_m)
+    frame = GridFrame(obstacle.shape[0], obstacle.shape[1], cfg.resolution_m, (origin[0], origin[1]))
+    return _finish(obstacle, frame, path.stem, None)
+
+
+def _is_dungeon(rgb: np.ndarray) -> bool:
+    colours = np.unique(rgb.reshape(-1, 3), axis=0)
+    known = {_DUNGEON_OBSTACLE, _DUNGEON_FREE, _DUNGEON_START}
+    return len(colours) <= 3 and all(tuple(int(v) for v in c) in known for c in colours)
+
+
+def _load_image(path: Path, cfg: MapConfig) -> GroundTruthMap:
+    img = _open_image(path)
+    start_rc = None
+    if img.mode in ("RGB", "RGBA", "P") and _is_dungeon(rgb := np.asarray(img.convert("RGB"))):
+        pixel = cfg.pixel_size_m or DUNGEON_PIXEL_M
+        free = np.all(rgb == _DUNGEON_FREE, axis=-1)
+        marker = np.all(rgb == _DUNGEON_START, axis=-1)
+        obstacle = ~(free | marker)
+        if marker.any():
+            rr, cc = np.nonzero(marker)
+            scale = pixel / cfg.resolution_m
+            start_rc = (int(rr.mean() * scale), int(cc.mean() * scale))
+    else:
+        pixel = cfg.pixel_size_m or GRAYSCALE_PIXEL_M
+        obstacle = np.asarray(img.convert("L")) < _GRAY_FREE_MIN
+    obstacle = resample_obstacles(obstacle, pixel, cfg.resolution_m)
+    frame = GridFrame(obstacle.shape[0], obstacle.shape[1], cfg.resolution_m)
+    if start_rc is not None:
+        start_rc = (min(start_rc[0], frame.height - 1), min(start_rc[1], frame.width - 1))
+    return _finish(obstacle, frame, path.stem, start_rc)
+
+
+def _load_houseexpo_json(path: Path, cfg: MapConfig) -> GroundTruthMap:
+    try:
+        data = json.loads(path.read_text())
+        verts = np.asarray(data["verts"], dtype=np.float64)
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
+        raise MrExploreError(
+            f"malformed HouseExpo JSON {path}: {type(exc).__name__} {exc}; give a file with a 'verts' polygon"
+        ) from None
+    if verts.ndim != 2 or verts.shape[1] != 2 or len(verts) < 3 or not np.isfinite(verts).all():
+        raise MrExploreError(f"malformed HouseExpo JSON {path}: 'verts' must be >= 3 [x, y] points in metres")
+    lo = verts.min(axis=0) - _HOUSEEXPO_PAD_M
+    hi = verts.max(axis=0) + _HOUSEEXPO_PAD_M
+    w = math.ceil((hi[0] - lo[0]) / HOUSEEXPO_RASTER_M)
+    h = math.ceil((hi[1] - lo[1]) / HOUSEEXPO_RASTER_M)
+    canvas = Image.new("L", (w, h), 0)
+    # Row grows with -y (map frame convention), so flip y when rasterising.
+    px = [((x - lo[0]) / HOUSEEXPO_RASTER_M, (hi[1] - y) / HOUSEEXPO_RASTER_M) for x, y in verts]
+    ImageDraw.Draw(canvas).polygon(px, fill=255)
+    obstacle = np.asarray(canvas) < _GRAY_FREE_MIN
+    obstacle = resample_obstacles(obstacle, HOUSEEXPO_RASTER_M, cfg.resolution_m)
+    frame = GridFrame(obstacle.shape[0], obstacle.shape[1], cfg.resolution_m, (float(lo[0]), float(lo[1])))
+    return _finish(obstacle, frame, path.stem, None)

@@ -1,0 +1,1 @@
+"""Geodesic distance fields and A* on the belief grid, shared by every layer."""

@@ -1,0 +1,1 @@
+"""Layer 1 (paper IV-A): closing, frontier detection and Mean-Shift clustering."""

@@ -1,0 +1,159 @@
+"""Mean-Shift clustering of F_un into candidate targets (paper IV-A): adaptive bandwidth, snapped centres."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+from scipy.spatial.distance import pdist
+from sklearn.cluster import get_bin_seeds
+
+from mrexplore.config import PreprocessConfig
+
+__all__ = ["Clusters", "adaptive_bandwidth", "cluster_frontiers", "mean_shift"]
+
+
+@dataclass(frozen=True)
+class Clusters:
+    """Frontier clusters, the candidate targets of the global planner.
+
+    Attributes
+    ----------
+    centers_rc:
+        ``(k, 2) int32`` each cluster's member nearest to its Mean-Shift mode (always a frontier cell).
+    sizes:
+        ``(k,) int32`` member counts |C_k| (the paper's information gain g_ik).
+    members_rc:
+        ``(n, 2) int32`` member cells of the kept clusters.
+    labels:
+        ``(n,) int32`` cluster index of each member, ``0 .. k-1``.
+    """
+
+    centers_rc: NDArray[np.int32]
+    sizes: NDArray[np.int32]
+    members_rc: NDArray[np.int32]
+    labels: NDArray[np.int32]
+
+    def __len__(self) -> int:
+        return len(self.sizes)
+
+    def members_of(self, k: int) -> NDArray[np.int32]:
+        """``(|C_k|, 2) int32`` members of cluster ``k``."""
+        return self.members_rc[self.labels == k]
+
+    @classmethod
+    def empty(cls) -> Clusters:
+        z = np.zeros((0, 2), dtype=np.int32)
+        return cls(z, np.zeros(0, dtype=np.int32), z, np.zeros(0, dtype=np.int32))
+
+
+def adaptive_bandwidth(points: NDArray[np.floating], percentile: float, max_sample: int) -> float:
+    """Percentile of pairwise distances (paper: the 15th), over at most ``max_sample`` evenly strided points.
+
+    Examples
+    --------
+    >>> adaptive_bandwidth(np.array([[0.0, 0], [0, 1], [0, 3]]), 50, 100)
+    2.0
+    """
+    if len(points) > max_sample:
+        points = points[np.linspace(0, len(points) - 1, max_sample).astype(np.int64)]
+    return float(np.percentile(pdist(points), percentile))
+
+
+def cluster_frontiers(frontier_rc: NDArray[np.integer], cfg: PreprocessConfig) -> Clusters:
+    """Cluster frontier cells with Mean-Shift and snap each mode to its nearest member.
+
+    Clusters with fewer than ``cfg.min_cluster_size`` members are dropped (paper: 2).
+
+    Parameters
+    ----------
+    frontier_rc:
+        ``(n, 2) int`` frontier cells (F_un).
+
+    Examples
+    --------
+    >>> pts = np.array([[0, 0], [0, 1], [0, 2], [9, 9], [9, 10], [9, 11], [5, 0]])
+    >>> c = cluster_frontiers(pts, PreprocessConfig())
+    >>> c.centers_rc.tolist(), c.sizes.tolist()
+    ([[0, 1], [9, 10]], [3, 3])
+    """
+    n = len(frontier_rc)
+    if n < 2:
+        if n == 1 and cfg.min_cluster_size <= 1:
+            pts = np.asarray(frontier_rc, dtype=np.int32)
+            return Clusters(pts, np.ones(1, np.int32), pts, np.zeros(1, np.int32))
+        return Clusters.empty()
+    pts = np.asarray(frontier_rc, dtype=np.float64)
+    bandwidth = max(adaptive_bandwidth(pts, cfg.bandwidth_percentile, cfg.bandwidth_sample), 1.0)
+    modes, labels = mean_shift(pts, bandwidth)
+    sizes = np.bincount(labels, minlength=len(modes))
+    keep = np.flatnonzero(sizes >= cfg.min_cluster_size)
+    # Deterministic, readable order: clusters sorted by their (snapped) centre, row-major.
+    snapped = {int(k): _nearest_member(pts[labels == k], modes[k]) for k in keep}
+    keep = np.array(sorted(keep.tolist(), key=lambda k: tuple(snapped[k])), dtype=np.int64)
+    remap = np.full(len(sizes), -1, dtype=np.int64)
+    remap[keep] = np.arange(len(keep))
+    member = remap[labels] >= 0
+    members = np.asarray(frontier_rc, dtype=np.int32)[member]
+    new_labels = remap[labels[member]].astype(np.int32)
+    centers = np.array([snapped[int(k)] for k in keep], dtype=np.int32).reshape(-1, 2)
+    return Clusters(centers, sizes[keep].astype(np.int32), members, new_labels)
+
+
+def mean_shift(points: NDArray[np.float64], bandwidth: float, max_iter: int = 300
+               ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """scikit-learn's MeanShift (flat kernel, bin seeding, ``cluster_all``), with batched neighbour queries.
+
+    Same seeds (``sklearn.cluster.get_bin_seeds``), same update and stopping rule, same de-duplication
+    of modes by intensity and same nearest-mode labels as ``sklearn.cluster.MeanShift``; the test suite
+    checks the results are equal. sklearn validates its input and dispatches through joblib on every
+    neighbour query of every seed (about 0.7 ms each), which puts a decision at 100-600 ms; here all
+    seeds' queries go to one scipy ``cKDTree`` per iteration.
+
+    Returns
+    -------
+    ``((k, 2) float64 modes, (n,) int64 labels)``, modes ordered like sklearn's ``cluster_centers_``.
+    """
+    seeds = get_bin_seeds(points, bandwidth, 1)
+    if len(seeds) == len(points):
+        seeds = points  # sklearn's own fallback when binning does not reduce the seeds
+    tree = cKDTree(points)
+    stop = 1e-3 * bandwidth
+    means = np.array(seeds, dtype=np.float64)
+    counts = np.zeros(len(means), dtype=np.int64)
+    active = np.ones(len(means), dtype=bool)
+    iters = np.zeros(len(means), dtype=np.int64)
+    while active.any():
+        idx = np.flatnonzero(active)
+        for i, nbrs in zip(idx, tree.query_ball_point(means[idx], bandwidth), strict=True):
+            if len(nbrs) == 0:
+                active[i] = False
+                continue
+            old = means[i].copy()
+            means[i] = points[nbrs].mean(axis=0)
+            counts[i] = len(nbrs)
+            if np.linalg.norm(means[i] - old) <= stop or iters[i] == max_iter:
+                active[i] = False
+            iters[i] += 1
+    intensity: dict[tuple[float, ...], int] = {}
+    for m, c in zip(means, counts, strict=True):
+        if c:
+            intensity[tuple(m)] = int(c)
+    ordered = np.array([k for k, _ in sorted(intensity.items(), key=lambda t: (t[1], t[0]), reverse=True)])
+    unique = np.ones(len(ordered), dtype=bool)
+    center_tree = cKDTree(ordered)
+    for i in range(len(ordered)):
+        if unique[i]:
+            unique[center_tree.query_ball_point(ordered[i], bandwidth)] = False
+            unique[i] = True
+    modes = ordered[unique]
+    _, labels = cKDTree(modes).query(points, k=1)
+    return modes, np.asarray(labels, dtype=np.int64)
+
+
+def _nearest_member(members: NDArray[np.float64], mode: NDArray[np.float64]) -> list[int]:
+    """The member nearest to a Mean-Shift mode: modes may fall in walls or unknown space (paper IV-A)."""
+    d2 = ((members - mode) ** 2).sum(axis=1)
+    return [int(v) for v in members[int(np.argmin(d2))]]

@@ -1,0 +1,1 @@
+"""Ground truth, LiDAR, per-robot log-odds belief, motion, the multi-robot env and its measures."""
