@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -116,9 +117,10 @@ def mean_shift(points: NDArray[np.float64], bandwidth: float, max_iter: int = 30
     -------
     ``((k, 2) float64 modes, (n,) int64 labels)``, modes ordered like sklearn's ``cluster_centers_``.
     """
-    seeds = get_bin_seeds(points, bandwidth, 1)
-    if len(seeds) == len(points):
-        seeds = points  # sklearn's own fallback when binning does not reduce the seeds
+    with warnings.catch_warnings():
+        # sklearn warns when binning does not reduce the seeds, then seeds from the points: no news here.
+        warnings.simplefilter("ignore", UserWarning)
+        seeds = get_bin_seeds(points, bandwidth, 1)
     tree = cKDTree(points)
     stop = 1e-3 * bandwidth
     means = np.array(seeds, dtype=np.float64)

@@ -1,0 +1,133 @@
+"""Command line: parses arguments into configs and calls the library; bad input is one line and exit 2."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from typing import Any, NoReturn
+
+import numpy as np
+
+from mrexplore.config import MapConfig, MissionConfig, SimConfig, config_to_dict
+from mrexplore.maps.loaders import DEFAULT_MAP, load_map
+from mrexplore.mission import run_mission
+from mrexplore.render import GifRecorder, save_png
+from mrexplore.sim.starts import draw_starts, starts_from_xy
+from mrexplore.strategies import make_strategy, strategy_names
+from mrexplore.types import MrExploreError
+
+__all__ = ["main", "build_parser"]
+
+EXIT_BAD_INPUT = 2
+DEFAULT_STRATEGY = "utility"
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (no usage block), exit code 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_BAD_INPUT, f"mrexplore: error: {message}; see '{self.prog} --help'\n")
+
+
+def _xy(text: str) -> tuple[float, float]:
+    try:
+        x, y = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"start must be X,Y in metres, got {text!r}") from None
+    return (x, y)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="mrexplore", description="Multi-robot exploration with a hierarchical planner.")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    ex = sub.add_parser("explore", help="explore one map and report the measures")
+    ex.add_argument("--map", default=DEFAULT_MAP,
+                    help=f"map file (.yaml, .png/.pgm, HouseExpo .json) or generated:SEED (default {DEFAULT_MAP})")
+    ex.add_argument("--robots", type=int, default=SimConfig.robots, help="team size (default 3)")
+    ex.add_argument("--strategy", default=DEFAULT_STRATEGY,
+                    help=f"one of {', '.join(strategy_names())} (default {DEFAULT_STRATEGY})")
+    ex.add_argument("--seed", type=int, default=0, help="seed of starts and sensor noise (default 0)")
+    ex.add_argument("--max-steps", type=int, default=MissionConfig.max_steps, help="step budget (default 20000)")
+    ex.add_argument("--resolution", type=float, default=MapConfig.resolution_m,
+                    help="working cell size in metres (default 0.05)")
+    ex.add_argument("--pixel-size", type=float, default=None,
+                    help="metres per pixel of an image without YAML (default 0.01 grayscale, 0.1 DungeonMaps)")
+    ex.add_argument("--start", type=_xy, action="append", metavar="X,Y",
+                    help="start of a robot in metres (map frame); once per robot, or once to place the team near it")
+    ex.add_argument("--gif", help="write an animation of the run to this path")
+    ex.add_argument("--png", help="write a picture of the final map to this path")
+    ex.add_argument("--json", action="store_true", help="print one JSON object with the measures on stdout")
+    ex.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                    help="show a progress bar (default: only on a terminal)")
+    return parser
+
+
+def _explore(args: argparse.Namespace) -> dict[str, Any]:
+    map_cfg = MapConfig(resolution_m=args.resolution, pixel_size_m=args.pixel_size)
+    sim_cfg = SimConfig(robots=args.robots)
+    mission_cfg = MissionConfig(max_steps=args.max_steps)
+    strategy = make_strategy(args.strategy)
+    truth = load_map(args.map, map_cfg)
+    starts = None
+    if args.start:
+        given = starts_from_xy(truth, args.start)
+        if len(given) == sim_cfg.robots:
+            starts = given
+        elif len(given) == 1:
+            rng = np.random.default_rng(args.seed)
+            starts = draw_starts(truth, sim_cfg.robots, sim_cfg.start_spread_m, rng, tuple(given[0]))
+        else:
+            raise MrExploreError(f"--start must be given once or once per robot ({sim_cfg.robots}), "
+                                 f"got {len(given)}")
+    recorder = GifRecorder() if (args.gif or args.png) else None
+    result = run_mission(truth, strategy, sim_cfg, mission_cfg, seed=args.seed, starts_rc=starts,
+                         observer=recorder, progress=args.progress)
+    if recorder is not None and args.gif:
+        recorder.save_gif(args.gif)
+    if recorder is not None and args.png:
+        save_png(recorder.final_frame(), args.png)
+    record: dict[str, Any] = {
+        "strategy": strategy.name,
+        "map": truth.name,
+        "robots": sim_cfg.robots,
+        "seed": args.seed,
+        **result.measures.to_dict(),
+        "starts_xy": [list(truth.frame.rc_to_xy((int(r), int(c)))) for r, c in result.starts_rc],
+        "config": {"map": config_to_dict(map_cfg), "sim": config_to_dict(sim_cfg),
+                   "mission": config_to_dict(mission_cfg), "preprocess": config_to_dict(strategy.preprocess)},
+    }
+    return record
+
+
+def _summary(rec: dict[str, Any]) -> str:
+    def at(key: str) -> str:
+        return "never" if rec[key] is None else str(rec[key])
+
+    return "\n".join([
+        f"explored {rec['map']} with {rec['robots']} robots ({rec['strategy']}, seed {rec['seed']})",
+        f"  coverage {100 * rec['coverage']:.2f}% in {rec['steps']} steps "
+        f"(90% at {at('steps_to_90')}, 95% at {at('steps_to_95')}, 99% at {at('steps_to_99')})",
+        f"  driven: longest {rec['path_len_max_m']:.1f} m, team {rec['path_len_sum_m']:.1f} m; "
+        f"overlap {rec['overlap']:.2f}",
+        f"  {rec['decisions']} decisions, {rec['plan_ms_mean']:.1f} ms mean, {rec['plan_ms_p95']:.1f} ms p95; "
+        f"wall {rec['wall_s']:.1f} s; ended: {rec['done_reason']}",
+    ])
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``mrexplore`` command; returns the exit code."""
+    args = build_parser().parse_args(argv)
+    try:
+        if args.command == "explore":
+            rec = _explore(args)
+            print(json.dumps(rec) if args.json else _summary(rec))
+    except MrExploreError as exc:
+        print(f"mrexplore: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,130 @@
+"""Named complete pipelines (preprocessing -> global assignment -> goal per robot) for the CLI and the bench."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mrexplore.config import GlobalPlanningConfig, PreprocessConfig, SensorConfig
+from mrexplore.global_planning.classical import NearestPlanner, UtilityPlanner
+from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem, GlobalPlanner
+from mrexplore.paths.astar import astar_path
+from mrexplore.paths.distance_field import distance_field, distances_at
+from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers
+from mrexplore.preprocessing.frontiers import Frontiers, close_unknown_holes, detect_frontiers
+from mrexplore.sim.belief import Belief, merge_beliefs
+from mrexplore.types import BoolGrid, CellState, MrExploreError, StateGrid
+
+__all__ = ["Decision", "ExplorationPipeline", "STRATEGIES", "make_strategy", "strategy_names", "NO_GOAL"]
+
+NO_GOAL = np.array([-1, -1], dtype=np.int32)
+
+
+@dataclass(frozen=True)
+class Decision:
+    """The centre's answer at one decision.
+
+    Attributes
+    ----------
+    state:
+        ``(H, W) uint8`` the centre's grid after closing, on which everything was planned.
+    frontiers, clusters:
+        Layer 1 output.
+    assignment:
+        Layer 2 output.
+    goals_rc:
+        ``(n_robots, 2) int32`` goal cell per robot; ``(-1, -1)`` for none.
+    paths:
+        One ``(k, 2) int32`` path per robot from its cell to its goal (empty for none).
+    done_reason:
+        ``None`` while exploring; ``"no_frontiers"`` (no cluster of the minimum size left) or
+        ``"no_reachable_frontiers"`` (no robot can reach any cluster): the paper's termination criteria.
+    """
+
+    state: StateGrid
+    frontiers: Frontiers
+    clusters: Clusters
+    assignment: Assignment
+    goals_rc: NDArray[np.int32]
+    paths: list[NDArray[np.int32]]
+    done_reason: str | None
+
+
+@dataclass
+class ExplorationPipeline:
+    """A complete strategy: the centre's preprocessing, a global planner, and the goal of each robot."""
+
+    name: str
+    planner: GlobalPlanner
+    preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
+
+    def centre_state(self, beliefs: list[Belief], sensor: SensorConfig) -> StateGrid:
+        """The centre's grid: the robots' beliefs fused, then denoised by closing (paper IV-A)."""
+        state = merge_beliefs(beliefs).state(sensor)
+        return close_unknown_holes(state, self.preprocess.closing_size_cells)
+
+    def decide(self, state: StateGrid, robots_rc: NDArray[np.int32], resolution_m: float,
+               blacklist: BoolGrid | None = None) -> Decision:
+        """Run layers 1 and 2 on the centre's grid and give every robot a goal and a path.
+
+        ``blacklist`` marks frontier cells a robot stood on without resolving them; they are not
+        candidates any more (explore_lite blacklists such goals too).
+        """
+        frontiers = detect_frontiers(state)
+        un_rc = frontiers.un_rc
+        if blacklist is not None and len(un_rc):
+            un_rc = un_rc[~blacklist[un_rc[:, 0], un_rc[:, 1]]]
+        clusters = cluster_frontiers(un_rc, self.preprocess)
+        n = len(robots_rc)
+        passable = state == CellState.FREE
+        dist = np.full((n, len(clusters)), np.inf)
+        for i in range(n):
+            if len(clusters):
+                dist[i] = distances_at(distance_field(passable, tuple(robots_rc[i])), clusters.centers_rc)
+        empty = Assignment(np.full(n, UNASSIGNED, dtype=np.int64))
+        no_paths = [np.zeros((0, 2), np.int32) for _ in range(n)]
+        goals = np.tile(NO_GOAL, (n, 1))
+        if len(clusters) == 0:
+            return Decision(state, frontiers, clusters, empty, goals, no_paths, "no_frontiers")
+        if not np.isfinite(dist).any():
+            return Decision(state, frontiers, clusters, empty, goals, no_paths, "no_reachable_frontiers")
+        problem = AssignmentProblem(np.asarray(robots_rc, np.int32), clusters, dist, resolution_m, state)
+        assignment = self.planner.assign(problem)
+        paths = []
+        for i, k in enumerate(assignment.cluster_of_robot):
+            if k == UNASSIGNED:
+                paths.append(no_paths[i])
+                continue
+            goals[i] = clusters.centers_rc[k]
+            paths.append(astar_path(passable, tuple(robots_rc[i]), tuple(goals[i])))
+        return Decision(state, frontiers, clusters, assignment, goals, paths, None)
+
+
+def _nearest(gp: GlobalPlanningConfig, pp: PreprocessConfig) -> ExplorationPipeline:
+    return ExplorationPipeline("nearest", NearestPlanner(), pp)
+
+
+def _utility(gp: GlobalPlanningConfig, pp: PreprocessConfig) -> ExplorationPipeline:
+    return ExplorationPipeline("utility", UtilityPlanner(gp), pp)
+
+
+STRATEGIES: dict[str, Callable[[GlobalPlanningConfig, PreprocessConfig], ExplorationPipeline]] = {
+    "nearest": _nearest,
+    "utility": _utility,
+}
+"""Strategy name -> factory of its pipeline."""
+
+
+def strategy_names() -> list[str]:
+    return list(STRATEGIES)
+
+
+def make_strategy(name: str, global_cfg: GlobalPlanningConfig | None = None,
+                  preprocess_cfg: PreprocessConfig | None = None) -> ExplorationPipeline:
+    """The pipeline called ``name``; unknown names raise a one-line error listing the choices."""
+    if name not in STRATEGIES:
+        raise MrExploreError(f"unknown strategy {name!r}; choose one of {', '.join(STRATEGIES)}")
+    return STRATEGIES[name](global_cfg or GlobalPlanningConfig(), preprocess_cfg or PreprocessConfig())
