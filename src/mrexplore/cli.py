@@ -43,24 +43,44 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="mrexplore", description="Multi-robot exploration with a hierarchical planner.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     ex = sub.add_parser("explore", help="explore one map and report the measures")
-    ex.add_argument("--map", default=DEFAULT_MAP,
-                    help=f"map file (.yaml, .png/.pgm, HouseExpo .json) or generated:SEED (default {DEFAULT_MAP})")
+    ex.add_argument(
+        "--map",
+        default=DEFAULT_MAP,
+        help=f"map file (.yaml, .png/.pgm, HouseExpo .json) or generated:SEED (default {DEFAULT_MAP})",
+    )
     ex.add_argument("--robots", type=int, default=SimConfig.robots, help="team size (default 3)")
-    ex.add_argument("--strategy", default=DEFAULT_STRATEGY,
-                    help=f"one of {', '.join(strategy_names())} (default {DEFAULT_STRATEGY})")
+    ex.add_argument(
+        "--strategy",
+        default=DEFAULT_STRATEGY,
+        help=f"one of {', '.join(strategy_names())} (default {DEFAULT_STRATEGY})",
+    )
     ex.add_argument("--seed", type=int, default=0, help="seed of starts and sensor noise (default 0)")
     ex.add_argument("--max-steps", type=int, default=MissionConfig.max_steps, help="step budget (default 20000)")
-    ex.add_argument("--resolution", type=float, default=MapConfig.resolution_m,
-                    help="working cell size in metres (default 0.05)")
-    ex.add_argument("--pixel-size", type=float, default=None,
-                    help="metres per pixel of an image without YAML (default 0.01 grayscale, 0.1 DungeonMaps)")
-    ex.add_argument("--start", type=_xy, action="append", metavar="X,Y",
-                    help="start of a robot in metres (map frame); once per robot, or once to place the team near it")
+    ex.add_argument(
+        "--resolution", type=float, default=MapConfig.resolution_m, help="working cell size in metres (default 0.05)"
+    )
+    ex.add_argument(
+        "--pixel-size",
+        type=float,
+        default=None,
+        help="metres per pixel of an image without YAML (default 0.01 grayscale, 0.1 DungeonMaps)",
+    )
+    ex.add_argument(
+        "--start",
+        type=_xy,
+        action="append",
+        metavar="X,Y",
+        help="start of a robot in metres (map frame); once per robot, or once to place the team near it",
+    )
     ex.add_argument("--gif", help="write an animation of the run to this path")
     ex.add_argument("--png", help="write a picture of the final map to this path")
     ex.add_argument("--json", action="store_true", help="print one JSON object with the measures on stdout")
-    ex.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                    help="show a progress bar (default: only on a terminal)")
+    ex.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="show a progress bar (default: only on a terminal)",
+    )
     return parser
 
 
@@ -79,11 +99,18 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
             rng = np.random.default_rng(args.seed)
             starts = draw_starts(truth, sim_cfg.robots, sim_cfg.start_spread_m, rng, tuple(given[0]))
         else:
-            raise MrExploreError(f"--start must be given once or once per robot ({sim_cfg.robots}), "
-                                 f"got {len(given)}")
+            raise MrExploreError(f"--start must be given once or once per robot ({sim_cfg.robots}), got {len(given)}")
     recorder = GifRecorder() if (args.gif or args.png) else None
-    result = run_mission(truth, strategy, sim_cfg, mission_cfg, seed=args.seed, starts_rc=starts,
-                         observer=recorder, progress=args.progress)
+    result = run_mission(
+        truth,
+        strategy,
+        sim_cfg,
+        mission_cfg,
+        seed=args.seed,
+        starts_rc=starts,
+        observer=recorder,
+        progress=args.progress,
+    )
     if recorder is not None and args.gif:
         recorder.save_gif(args.gif)
     if recorder is not None and args.png:
@@ -95,8 +122,12 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
         "seed": args.seed,
         **result.measures.to_dict(),
         "starts_xy": [list(truth.frame.rc_to_xy((int(r), int(c)))) for r, c in result.starts_rc],
-        "config": {"map": config_to_dict(map_cfg), "sim": config_to_dict(sim_cfg),
-                   "mission": config_to_dict(mission_cfg), "preprocess": config_to_dict(strategy.preprocess)},
+        "config": {
+            "map": config_to_dict(map_cfg),
+            "sim": config_to_dict(sim_cfg),
+            "mission": config_to_dict(mission_cfg),
+            "preprocess": config_to_dict(strategy.preprocess),
+        },
     }
     return record
 
@@ -105,15 +136,17 @@ def _summary(rec: dict[str, Any]) -> str:
     def at(key: str) -> str:
         return "never" if rec[key] is None else str(rec[key])
 
-    return "\n".join([
-        f"explored {rec['map']} with {rec['robots']} robots ({rec['strategy']}, seed {rec['seed']})",
-        f"  coverage {100 * rec['coverage']:.2f}% in {rec['steps']} steps "
-        f"(90% at {at('steps_to_90')}, 95% at {at('steps_to_95')}, 99% at {at('steps_to_99')})",
-        f"  driven: longest {rec['path_len_max_m']:.1f} m, team {rec['path_len_sum_m']:.1f} m; "
-        f"overlap {rec['overlap']:.2f}",
-        f"  {rec['decisions']} decisions, {rec['plan_ms_mean']:.1f} ms mean, {rec['plan_ms_p95']:.1f} ms p95; "
-        f"wall {rec['wall_s']:.1f} s; ended: {rec['done_reason']}",
-    ])
+    return "\n".join(
+        [
+            f"explored {rec['map']} with {rec['robots']} robots ({rec['strategy']}, seed {rec['seed']})",
+            f"  coverage {100 * rec['coverage']:.2f}% in {rec['steps']} steps "
+            f"(90% at {at('steps_to_90')}, 95% at {at('steps_to_95')}, 99% at {at('steps_to_99')})",
+            f"  driven: longest {rec['path_len_max_m']:.1f} m, team {rec['path_len_sum_m']:.1f} m; "
+            f"overlap {rec['overlap']:.2f}",
+            f"  {rec['decisions']} decisions, {rec['plan_ms_mean']:.1f} ms mean, {rec['plan_ms_p95']:.1f} ms p95; "
+            f"wall {rec['wall_s']:.1f} s; ended: {rec['done_reason']}",
+        ]
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:

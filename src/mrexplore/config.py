@@ -52,8 +52,8 @@ class SensorConfig:
 
     range_m: float = 6.0
     """Maximum range, metres, > 0 (paper: 6 m)."""
-    ray_oversampling: float = 1.5
-    """Rays per cell of circumference at full range, >= 1; 1.5 leaves no gaps at full range."""
+    ray_oversampling: float = 1.0
+    """Beams per cell of circumference at full range, >= 1; 1 already leaves no gap within range - 0.5 cell."""
     p_hit: float = 0.7
     """P(occupied | beam ends in cell), in (0.5, 1) (OctoMap's default)."""
     p_miss: float = 0.4
@@ -141,9 +141,7 @@ class PreprocessConfig:
             self.closing_size_cells,
         )
         _require(self.min_cluster_size >= 1, "min_cluster_size", ">= 1", self.min_cluster_size)
-        _require(
-            0 < self.bandwidth_percentile <= 100, "bandwidth_percentile", "in (0, 100]", self.bandwidth_percentile
-        )
+        _require(0 < self.bandwidth_percentile <= 100, "bandwidth_percentile", "in (0, 100]", self.bandwidth_percentile)
         _require(self.bandwidth_sample >= 2, "bandwidth_sample", ">= 2", self.bandwidth_sample)
 
 

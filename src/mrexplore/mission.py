@@ -104,11 +104,18 @@ def run_mission(
             if not has_goal:
                 continue
             reached = sim.at_path_end(i)
-            if reached and np.array_equal(sim.positions_rc[i], goals[i]) and _goal_still_frontier(
-                    sim.team_observed, goals[i]):
+            if (
+                reached
+                and np.array_equal(sim.positions_rc[i], goals[i])
+                and _goal_still_frontier(sim.team_observed, goals[i])
+            ):
                 blacklist[goals[i, 0], goals[i, 1]] = True  # stood on it and it stayed a frontier
-            if (reached or blocked[i] or not _goal_still_frontier(sim.team_observed, goals[i])
-                    or sim.path_ahead_blocked(i)):
+            if (
+                reached
+                or blocked[i]
+                or not _goal_still_frontier(sim.team_observed, goals[i])
+                or sim.path_ahead_blocked(i)
+            ):
                 need = True
         if need:
             t = time.perf_counter()
@@ -136,4 +143,4 @@ def run_mission(
     measures = EpisodeMeasures.from_run(
         np.asarray(curve), sim.robot_coverage, sim.path_len_m, plan_ms, time.perf_counter() - t0, done_reason
     )
-    return MissionResult(measures, np.asarray(curve), starts_rc, state, sim)
+    return MissionResult(measures, np.asarray(curve), np.asarray(starts_rc, dtype=np.int32), state, sim)

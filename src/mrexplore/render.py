@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -21,19 +21,41 @@ _UNKNOWN = (205, 205, 205)
 _TRUTH_WALL = (172, 172, 172)
 _FREE = (255, 255, 255)
 _OCCUPIED = (20, 20, 20)
-_ROBOT_COLOURS = [(220, 50, 47), (38, 139, 210), (133, 153, 0), (211, 54, 130), (181, 137, 0),
-                  (42, 161, 152), (108, 113, 196), (203, 75, 22)]
-_CLUSTER_COLOURS = [(255, 127, 14), (44, 160, 44), (148, 103, 189), (23, 190, 207), (188, 189, 34),
-                    (227, 119, 194), (140, 86, 75), (31, 119, 180)]
+_ROBOT_COLOURS = [
+    (220, 50, 47),
+    (38, 139, 210),
+    (133, 153, 0),
+    (211, 54, 130),
+    (181, 137, 0),
+    (42, 161, 152),
+    (108, 113, 196),
+    (203, 75, 22),
+]
+_CLUSTER_COLOURS = [
+    (255, 127, 14),
+    (44, 160, 44),
+    (148, 103, 189),
+    (23, 190, 207),
+    (188, 189, 34),
+    (227, 119, 194),
+    (140, 86, 75),
+    (31, 119, 180),
+]
 
 
 def _robot_colour(i: int) -> tuple[int, int, int]:
     return _ROBOT_COLOURS[i % len(_ROBOT_COLOURS)]
 
 
-def render_frame(truth_occupied: NDArray[np.bool_], state: StateGrid, positions_rc: NDArray[np.integer],
-                 trails: list[NDArray[np.integer]], clusters: Clusters | None, goals_rc: NDArray[np.integer],
-                 scale: float = 1.0) -> Image.Image:
+def render_frame(
+    truth_occupied: NDArray[np.bool_],
+    state: StateGrid,
+    positions_rc: NDArray[np.integer],
+    trails: Sequence[NDArray[np.integer]],
+    clusters: Clusters | None,
+    goals_rc: NDArray[np.integer],
+    scale: float = 1.0,
+) -> Image.Image:
     """One RGB picture: ground truth faded under the belief, cluster members, trails, robots, goals.
 
     ``scale`` is output pixels per cell (below 1 shrinks, box-averaged).
@@ -107,8 +129,12 @@ class GifRecorder:
             raise MrExploreError("no frames recorded; run a mission with the recorder as observer")
         frames = [*self.frames, self._frame(scale=min(1.0, self.max_side / max(self._last[0].truth.shape)))]
         durations = [frame_ms] * (len(frames) - 1) + [2000]
-        _write(path, lambda p: frames[0].save(p, save_all=True, append_images=frames[1:],
-                                              duration=durations, loop=0, optimize=False))
+        _write(
+            path,
+            lambda p: frames[0].save(
+                p, save_all=True, append_images=frames[1:], duration=durations, loop=0, optimize=False
+            ),
+        )
 
 
 def save_png(img: Image.Image, path: str | Path) -> None:

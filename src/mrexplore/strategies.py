@@ -11,8 +11,7 @@ from numpy.typing import NDArray
 from mrexplore.config import GlobalPlanningConfig, PreprocessConfig, SensorConfig
 from mrexplore.global_planning.classical import NearestPlanner, UtilityPlanner
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem, GlobalPlanner
-from mrexplore.paths.astar import astar_path
-from mrexplore.paths.distance_field import distance_field, distances_at
+from mrexplore.paths.distance_field import descend_path, distance_fields, distances_at
 from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers
 from mrexplore.preprocessing.frontiers import Frontiers, close_unknown_holes, detect_frontiers
 from mrexplore.sim.belief import Belief, merge_beliefs
@@ -66,8 +65,9 @@ class ExplorationPipeline:
         state = merge_beliefs(beliefs).state(sensor)
         return close_unknown_holes(state, self.preprocess.closing_size_cells)
 
-    def decide(self, state: StateGrid, robots_rc: NDArray[np.int32], resolution_m: float,
-               blacklist: BoolGrid | None = None) -> Decision:
+    def decide(
+        self, state: StateGrid, robots_rc: NDArray[np.int32], resolution_m: float, blacklist: BoolGrid | None = None
+    ) -> Decision:
         """Run layers 1 and 2 on the centre's grid and give every robot a goal and a path.
 
         ``blacklist`` marks frontier cells a robot stood on without resolving them; they are not
@@ -81,9 +81,9 @@ class ExplorationPipeline:
         n = len(robots_rc)
         passable = state == CellState.FREE
         dist = np.full((n, len(clusters)), np.inf)
-        for i in range(n):
-            if len(clusters):
-                dist[i] = distances_at(distance_field(passable, tuple(robots_rc[i])), clusters.centers_rc)
+        fields = distance_fields(passable, robots_rc) if len(clusters) else []
+        for i, field_i in enumerate(fields):
+            dist[i] = distances_at(field_i, clusters.centers_rc)
         empty = Assignment(np.full(n, UNASSIGNED, dtype=np.int64))
         no_paths = [np.zeros((0, 2), np.int32) for _ in range(n)]
         goals = np.tile(NO_GOAL, (n, 1))
@@ -99,7 +99,8 @@ class ExplorationPipeline:
                 paths.append(no_paths[i])
                 continue
             goals[i] = clusters.centers_rc[k]
-            paths.append(astar_path(passable, tuple(robots_rc[i]), tuple(goals[i])))
+            # The robot's field already holds every shortest distance: read the path off it.
+            paths.append(descend_path(fields[i], passable, tuple(goals[i])))
         return Decision(state, frontiers, clusters, assignment, goals, paths, None)
 
 
@@ -122,8 +123,9 @@ def strategy_names() -> list[str]:
     return list(STRATEGIES)
 
 
-def make_strategy(name: str, global_cfg: GlobalPlanningConfig | None = None,
-                  preprocess_cfg: PreprocessConfig | None = None) -> ExplorationPipeline:
+def make_strategy(
+    name: str, global_cfg: GlobalPlanningConfig | None = None, preprocess_cfg: PreprocessConfig | None = None
+) -> ExplorationPipeline:
     """The pipeline called ``name``; unknown names raise a one-line error listing the choices."""
     if name not in STRATEGIES:
         raise MrExploreError(f"unknown strategy {name!r}; choose one of {', '.join(STRATEGIES)}")

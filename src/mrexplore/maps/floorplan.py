@@ -39,8 +39,12 @@ class FloorplanSpec:
             raise MrExploreError("floor plan needs door_m < min_room_m <= max_room_m")
 
 
-def _split(rng: np.random.Generator, rect: tuple[float, float, float, float], spec: FloorplanSpec,
-           out: list[tuple[float, float, float, float]]) -> None:
+def _split(
+    rng: np.random.Generator,
+    rect: tuple[float, float, float, float],
+    spec: FloorplanSpec,
+    out: list[tuple[float, float, float, float]],
+) -> None:
     x0, y0, x1, y1 = rect
     w, h = x1 - x0, y1 - y0
     can_x, can_y = w >= 2 * spec.min_room_m, h >= 2 * spec.min_room_m
@@ -85,7 +89,7 @@ def generate_floorplan(spec: FloorplanSpec, resolution_m: float) -> BoolGrid:
     --------
     >>> occ = generate_floorplan(FloorplanSpec(seed=1), 0.1)
     >>> occ.shape
-    (122, 162)
+    (123, 163)
     >>> bool(occ[0].all() and occ[-1].all())  # closed outer wall
     True
     """
@@ -106,8 +110,12 @@ def generate_floorplan(spec: FloorplanSpec, resolution_m: float) -> BoolGrid:
     for x0, y0, x1, y1 in rooms:
         occ[cells(y0 + half, y1 - half, H), cells(x0 + half, x1 - half, W)] = False
     need = spec.door_m + 2 * spec.wall_m
-    edges = [(i, j, e) for i in range(len(rooms)) for j in range(i + 1, len(rooms))
-             if (e := _shared_edge(rooms[i], rooms[j], need)) is not None]
+    edges = [
+        (i, j, e)
+        for i in range(len(rooms))
+        for j in range(i + 1, len(rooms))
+        if (e := _shared_edge(rooms[i], rooms[j], need)) is not None
+    ]
     order = rng.permutation(len(edges))
     parent = list(range(len(rooms)))
 
@@ -125,8 +133,10 @@ def generate_floorplan(spec: FloorplanSpec, resolution_m: float) -> BoolGrid:
         parent[find(i)] = find(j)
         centre = rng.uniform(lo + spec.wall_m + spec.door_m / 2, hi - spec.wall_m - spec.door_m / 2)
         d0, d1 = centre - spec.door_m / 2, centre + spec.door_m / 2
+        # Cut through the wall with a cell to spare on each side: rounding may thicken walls by a cell.
+        w0, w1 = pos - spec.wall_m - resolution_m, pos + spec.wall_m + resolution_m
         if axis == "x":
-            occ[cells(d0, d1, H), cells(pos - spec.wall_m, pos + spec.wall_m, W)] = False
+            occ[cells(d0, d1, H), cells(w0, w1, W)] = False
         else:
-            occ[cells(pos - spec.wall_m, pos + spec.wall_m, H), cells(d0, d1, W)] = False
+            occ[cells(w0, w1, H), cells(d0, d1, W)] = False
     return occ

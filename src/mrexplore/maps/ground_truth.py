@@ -58,7 +58,7 @@ def mark_outside_as_obstacle(occupied: BoolGrid) -> BoolGrid:
     ...                 [0, 1, 0, 1, 0],
     ...                 [0, 1, 1, 1, 0],
     ...                 [0, 0, 0, 0, 0]], bool)
-    >>> (~mark_outside_as_obstacle(occ)).astype(int).sum()  # only the enclosed centre stays free
+    >>> int((~mark_outside_as_obstacle(occ)).sum())  # only the enclosed centre stays free
     1
     """
     labels, _ = free_components(occupied)

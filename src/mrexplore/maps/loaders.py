@@ -85,9 +85,7 @@ def load_map(spec: str | Path, cfg: MapConfig | None = None) -> GroundTruthMap:
 def _finish(obstacle: np.ndarray, frame: GridFrame, name: str, start_rc: tuple[int, int] | None) -> GroundTruthMap:
     occupied = mark_outside_as_obstacle(obstacle)
     if not (~occupied).any():
-        raise MrExploreError(
-            f"map {name} has no free space inside its border; check the file's free/occupied values"
-        )
+        raise MrExploreError(f"map {name} has no free space inside its border; check the file's free/occupied values")
     if start_rc is not None and occupied[start_rc]:
         start_rc = None
     return GroundTruthMap(occupied=occupied, frame=frame, name=name, start_hint_rc=start_rc)
@@ -150,7 +148,7 @@ def _load_ros_yaml(path: Path, cfg: MapConfig) -> GroundTruthMap:
     img = _open_image(path.parent / str(data["image"]))
     gray = np.asarray(img.convert("L"), dtype=np.float64)
     # map_server: p = (255 - v) / 255 (negate 0); free below free_thresh, occupied above occupied_thresh,
-    # unknown between; only free counts as free here. Unknown ground truth counts as obstacle: nothing can be known behind it.
+    # unknown between. Only free counts as free: unknown ground truth is obstacle, nothing is known behind it.
     p = gray / 255.0 if negate else (255.0 - gray) / 255.0
     obstacle = ~(p < free_th)
     obstacle = resample_obstacles(obstacle, resolution, cfg.resolution_m)

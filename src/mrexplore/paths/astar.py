@@ -138,8 +138,7 @@ def astar_path(passable: BoolGrid, start_rc: GridRC, goal_rc: GridRC) -> NDArray
     """
     if passable.dtype != np.bool_:
         passable = passable.astype(bool)
-    return _astar(np.ascontiguousarray(passable), int(start_rc[0]), int(start_rc[1]),
-                  int(goal_rc[0]), int(goal_rc[1]))
+    return _astar(np.ascontiguousarray(passable), int(start_rc[0]), int(start_rc[1]), int(goal_rc[0]), int(goal_rc[1]))
 
 
 def path_length_cells(path_rc: NDArray[np.integer]) -> float:

@@ -3,12 +3,16 @@
 With only two edge weights (1 for straight moves, sqrt(2) for diagonal ones), Dijkstra's priority queue
 can be replaced by two FIFO queues, one per weight: keys pushed into each queue are the popped key plus a
 constant, and popped keys never decrease, so each queue stays sorted and the smaller front is the global
-minimum. Every cell is settled once: O(cells) instead of O(cells log cells).
+minimum. Every cell is settled once: O(cells) instead of O(cells log cells). A cell enters each queue at
+most once (a later push into the same queue would carry a larger key), so each queue needs one slot per
+cell.
 """
 
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 
 import numba as nb
 import numpy as np
@@ -16,68 +20,74 @@ from numpy.typing import NDArray
 
 from mrexplore.types import BoolGrid, GridRC
 
-__all__ = ["distance_field", "distances_at", "SQRT2"]
+__all__ = ["distance_field", "distance_fields", "distances_at", "descend_path", "SQRT2"]
 
 SQRT2 = math.sqrt(2.0)
 _DR = np.array([-1, 1, 0, 0, -1, -1, 1, 1], dtype=np.int64)
 _DC = np.array([0, 0, -1, 1, -1, 1, -1, 1], dtype=np.int64)
+_POOL = ThreadPoolExecutor(max_workers=os.cpu_count() or 1, thread_name_prefix="mrexplore-field")
 
 
 @nb.njit(cache=True, nogil=True)
 def _two_queue_dijkstra(passable: np.ndarray, sr: int, sc: int) -> np.ndarray:  # pragma: no cover - numba
     H, W = passable.shape
-    n = H * W
-    dist = np.full((H, W), np.inf, dtype=np.float32)
-    if not passable[sr, sc]:
-        return dist
-    done = np.zeros((H, W), dtype=np.bool_)
-    cap = 4 * n + 1
-    q_node = np.empty((2, cap), dtype=np.int32)
-    q_key = np.empty((2, cap), dtype=np.float64)
-    head = np.zeros(2, dtype=np.int64)
-    tail = np.zeros(2, dtype=np.int64)
-    best = np.full(n, np.inf, dtype=np.float64)
-    s = sr * W + sc
+    # Work on a copy padded by one blocked cell: neighbours never leave the array, no bounds checks.
+    Wp = W + 2
+    n = (H + 2) * Wp
+    free = np.zeros(n, dtype=np.bool_)
+    for r in range(H):
+        for c in range(W):
+            free[(r + 1) * Wp + c + 1] = passable[r, c]
+    best = np.full(n, np.inf, dtype=np.float32)
+    out = np.full((H, W), np.inf, dtype=np.float32)
+    s = (sr + 1) * Wp + sc + 1
+    if not free[s]:
+        return out
+    straight = np.array([-Wp, Wp, -1, 1], dtype=np.int64)
+    diag = np.array([-Wp - 1, -Wp + 1, Wp - 1, Wp + 1], dtype=np.int64)
+    # The two orthogonal cells a diagonal move passes between (no corner cutting).
+    side_a = np.array([-1, 1, -1, 1], dtype=np.int64)
+    side_b = np.array([-Wp, -Wp, Wp, Wp], dtype=np.int64)
+    q_node = np.empty((2, H * W + 1), dtype=np.int64)
+    q_key = np.empty((2, H * W + 1), dtype=np.float32)
+    h0 = t0 = h1 = t1 = 0
+    sqrt2 = np.float32(math.sqrt(2.0))
+    one = np.float32(1.0)
     best[s] = 0.0
     q_node[0, 0] = s
     q_key[0, 0] = 0.0
-    tail[0] = 1
-    sqrt2 = math.sqrt(2.0)
-    while head[0] < tail[0] or head[1] < tail[1]:
-        if head[1] >= tail[1] or (head[0] < tail[0] and q_key[0, head[0]] <= q_key[1, head[1]]):
-            k = 0
+    t0 = 1
+    while h0 < t0 or h1 < t1:
+        if h1 >= t1 or (h0 < t0 and q_key[0, h0] <= q_key[1, h1]):
+            u = q_node[0, h0]
+            du = q_key[0, h0]
+            h0 += 1
         else:
-            k = 1
-        u = q_node[k, head[k]]
-        du = q_key[k, head[k]]
-        head[k] += 1
-        r = u // W
-        c = u - r * W
-        if done[r, c]:
-            continue
-        done[r, c] = True
-        dist[r, c] = du
-        for d in range(8):
-            rr = r + _DR[d]
-            cc = c + _DC[d]
-            if rr < 0 or rr >= H or cc < 0 or cc >= W or not passable[rr, cc] or done[rr, cc]:
-                continue
-            if d >= 4:
-                # Diagonal: both orthogonal neighbours must be passable (no corner cutting).
-                if not passable[r, cc] or not passable[rr, c]:
-                    continue
-                nd = du + sqrt2
-                kk = 1
-            else:
-                nd = du + 1.0
-                kk = 0
-            v = rr * W + cc
-            if nd < best[v]:
+            u = q_node[1, h1]
+            du = q_key[1, h1]
+            h1 += 1
+        if du > best[u]:
+            continue  # stale: u was settled with a smaller key
+        nd = du + one
+        for k in range(4):
+            v = u + straight[k]
+            if free[v] and nd < best[v]:
                 best[v] = nd
-                q_node[kk, tail[kk]] = v
-                q_key[kk, tail[kk]] = nd
-                tail[kk] += 1
-    return dist
+                q_node[0, t0] = v
+                q_key[0, t0] = nd
+                t0 += 1
+        nd = du + sqrt2
+        for k in range(4):
+            v = u + diag[k]
+            if free[v] and nd < best[v] and free[u + side_a[k]] and free[u + side_b[k]]:
+                best[v] = nd
+                q_node[1, t1] = v
+                q_key[1, t1] = nd
+                t1 += 1
+    for r in range(H):
+        for c in range(W):
+            out[r, c] = best[(r + 1) * Wp + c + 1]
+    return out
 
 
 def distance_field(passable: BoolGrid, source_rc: GridRC) -> NDArray[np.float32]:
@@ -105,6 +115,94 @@ def distance_field(passable: BoolGrid, source_rc: GridRC) -> NDArray[np.float32]
     if passable.dtype != np.bool_:
         passable = passable.astype(bool)
     return _two_queue_dijkstra(np.ascontiguousarray(passable), int(source_rc[0]), int(source_rc[1]))
+
+
+def distance_fields(passable: BoolGrid, sources_rc: NDArray[np.integer]) -> list[NDArray[np.float32]]:
+    """One :func:`distance_field` per source, computed on the passable bounding box, on all cores.
+
+    Returns
+    -------
+    One ``(H, W) float32`` field per row of ``sources_rc`` (``(n, 2) int``).
+    """
+    if passable.dtype != np.bool_:
+        passable = passable.astype(bool)
+    rows = np.flatnonzero(passable.any(axis=1))
+    if len(rows) == 0:
+        return [np.full(passable.shape, np.inf, dtype=np.float32) for _ in range(len(sources_rc))]
+    cols = np.flatnonzero(passable.any(axis=0))
+    r0, r1, c0, c1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
+    crop = np.ascontiguousarray(passable[r0:r1, c0:c1])
+
+    def one(src: NDArray[np.integer]) -> NDArray[np.float32]:
+        out = np.full(passable.shape, np.inf, dtype=np.float32)
+        r, c = int(src[0]) - r0, int(src[1]) - c0
+        if 0 <= r < crop.shape[0] and 0 <= c < crop.shape[1]:
+            out[r0:r1, c0:c1] = _two_queue_dijkstra(crop, r, c)
+        return out
+
+    if len(sources_rc) < 2:
+        return [one(s) for s in sources_rc]
+    # The kernel releases the GIL, so threads use every core.
+    return list(_POOL.map(one, list(sources_rc)))
+
+
+@nb.njit(cache=True, nogil=True)
+def _descend(field: np.ndarray, passable: np.ndarray, gr: int, gc: int) -> np.ndarray:  # pragma: no cover
+    H, W = field.shape
+    if not np.isfinite(field[gr, gc]):
+        return np.zeros((0, 2), dtype=np.int32)
+    n = 1
+    cap = H * W
+    out = np.empty((cap, 2), dtype=np.int32)
+    out[0, 0] = gr
+    out[0, 1] = gc
+    r = gr
+    c = gc
+    sqrt2 = math.sqrt(2.0)
+    while field[r, c] > 0.0 and n < cap:
+        best = field[r, c]
+        br = -1
+        bc = -1
+        for d in range(8):
+            rr = r + _DR[d]
+            cc = c + _DC[d]
+            if rr < 0 or rr >= H or cc < 0 or cc >= W or not passable[rr, cc]:
+                continue
+            if d >= 4:
+                if not passable[r, cc] or not passable[rr, c]:
+                    continue
+                step = sqrt2
+            else:
+                step = 1.0
+            # Follow a neighbour whose distance plus the move explains ours: it lies on a shortest path.
+            if field[rr, cc] + step <= field[r, c] + 1e-4 and field[rr, cc] < best:
+                best = field[rr, cc]
+                br = rr
+                bc = cc
+        if br < 0:
+            return np.zeros((0, 2), dtype=np.int32)
+        r = br
+        c = bc
+        out[n, 0] = r
+        out[n, 1] = c
+        n += 1
+    return out[:n][::-1].copy()
+
+
+def descend_path(field: NDArray[np.float32], passable: BoolGrid, goal_rc: GridRC) -> NDArray[np.int32]:
+    """Shortest path from a field's source to ``goal_rc``, read off the field (no search).
+
+    Returns
+    -------
+    ``(k, 2) int32`` cells from the source to the goal inclusive; ``(0, 2)`` if the goal is unreachable.
+
+    Examples
+    --------
+    >>> g = np.ones((3, 4), bool); g[0:2, 1] = False  # both diagonals around it would cut its corner
+    >>> descend_path(distance_field(g, (0, 0)), g, (0, 2)).tolist()
+    [[0, 0], [1, 0], [2, 0], [2, 1], [2, 2], [1, 2], [0, 2]]
+    """
+    return _descend(field, np.ascontiguousarray(passable, dtype=bool), int(goal_rc[0]), int(goal_rc[1]))
 
 
 def distances_at(field: NDArray[np.float32], cells_rc: NDArray[np.integer]) -> NDArray[np.float64]:

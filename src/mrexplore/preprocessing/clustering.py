@@ -83,8 +83,8 @@ def cluster_frontiers(frontier_rc: NDArray[np.integer], cfg: PreprocessConfig) -
     n = len(frontier_rc)
     if n < 2:
         if n == 1 and cfg.min_cluster_size <= 1:
-            pts = np.asarray(frontier_rc, dtype=np.int32)
-            return Clusters(pts, np.ones(1, np.int32), pts, np.zeros(1, np.int32))
+            one = np.asarray(frontier_rc, dtype=np.int32)
+            return Clusters(one, np.ones(1, np.int32), one, np.zeros(1, np.int32))
         return Clusters.empty()
     pts = np.asarray(frontier_rc, dtype=np.float64)
     bandwidth = max(adaptive_bandwidth(pts, cfg.bandwidth_percentile, cfg.bandwidth_sample), 1.0)
@@ -103,8 +103,9 @@ def cluster_frontiers(frontier_rc: NDArray[np.integer], cfg: PreprocessConfig) -
     return Clusters(centers, sizes[keep].astype(np.int32), members, new_labels)
 
 
-def mean_shift(points: NDArray[np.float64], bandwidth: float, max_iter: int = 300
-               ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+def mean_shift(
+    points: NDArray[np.float64], bandwidth: float, max_iter: int = 300
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """scikit-learn's MeanShift (flat kernel, bin seeding, ``cluster_all``), with batched neighbour queries.
 
     Same seeds (``sklearn.cluster.get_bin_seeds``), same update and stopping rule, same de-duplication
@@ -146,10 +147,10 @@ def mean_shift(points: NDArray[np.float64], bandwidth: float, max_iter: int = 30
     ordered = np.array([k for k, _ in sorted(intensity.items(), key=lambda t: (t[1], t[0]), reverse=True)])
     unique = np.ones(len(ordered), dtype=bool)
     center_tree = cKDTree(ordered)
-    for i in range(len(ordered)):
-        if unique[i]:
-            unique[center_tree.query_ball_point(ordered[i], bandwidth)] = False
-            unique[i] = True
+    for j in range(len(ordered)):
+        if unique[j]:
+            unique[center_tree.query_ball_point(ordered[j], bandwidth)] = False
+            unique[j] = True
     modes = ordered[unique]
     _, labels = cKDTree(modes).query(points, k=1)
     return modes, np.asarray(labels, dtype=np.int64)

@@ -51,7 +51,7 @@ def close_unknown_holes(state: StateGrid, size_cells: int) -> StateGrid:
     --------
     >>> F, O, U = CellState.FREE, CellState.OCCUPIED, CellState.UNKNOWN
     >>> g = np.full((5, 5), F, np.uint8); g[2, 2] = U; g[:, 4] = O
-    >>> close_unknown_holes(g, 3)[2, 2] == F
+    >>> bool(close_unknown_holes(g, 3)[2, 2] == F)
     True
     """
     if size_cells <= 1:
@@ -83,7 +83,5 @@ def detect_frontiers(state: StateGrid) -> Frontiers:
     """
     free = state == CellState.FREE
     channels = {s: (state == s).astype(np.uint8) for s in (CellState.UNKNOWN, CellState.OCCUPIED)}
-    counts = {
-        s: ndimage.convolve(ch, FOUR_NEIGHBOUR_KERNEL, mode="constant", cval=0) for s, ch in channels.items()
-    }
+    counts = {s: ndimage.convolve(ch, FOUR_NEIGHBOUR_KERNEL, mode="constant", cval=0) for s, ch in channels.items()}
     return Frontiers(un_mask=free & (counts[CellState.UNKNOWN] > 0), occ_mask=free & (counts[CellState.OCCUPIED] > 0))

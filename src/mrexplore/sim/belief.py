@@ -62,6 +62,8 @@ def classify(log_odds: np.ndarray, observed: BoolGrid, sensor: SensorConfig) -> 
 
 def merge_beliefs(beliefs: Sequence[Belief]) -> Belief:
     """Fuse robots' beliefs as independent evidence: log-odds add, observed cells unite."""
-    log_odds = np.sum([b.log_odds for b in beliefs], axis=0, dtype=np.float32)
+    log_odds = np.zeros_like(beliefs[0].log_odds)
+    for b in beliefs:
+        log_odds += b.log_odds
     observed = np.logical_or.reduce([b.observed for b in beliefs])
     return Belief(log_odds, observed)

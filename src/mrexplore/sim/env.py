@@ -25,7 +25,7 @@ from mrexplore.types import CellState, MrExploreError
 __all__ = ["ExplorationParallelEnv"]
 
 
-class ExplorationParallelEnv(ParallelEnv):  # type: ignore[misc]
+class ExplorationParallelEnv(ParallelEnv):
     """Multi-robot exploration as a PettingZoo parallel environment.
 
     Observations per agent: ``{"belief": (H, W) uint8 CellState of its own grid,
@@ -34,8 +34,14 @@ class ExplorationParallelEnv(ParallelEnv):  # type: ignore[misc]
 
     metadata = {"name": "mrexplore_v0", "render_modes": ["rgb_array"], "is_parallelizable": True}
 
-    def __init__(self, truth: GroundTruthMap, sim_cfg: SimConfig | None = None, max_steps: int = 2000,
-                 done_coverage: float = 0.99, render_mode: str | None = None) -> None:
+    def __init__(
+        self,
+        truth: GroundTruthMap,
+        sim_cfg: SimConfig | None = None,
+        max_steps: int = 2000,
+        done_coverage: float = 0.99,
+        render_mode: str | None = None,
+    ) -> None:
         if max_steps < 1:
             raise MrExploreError(f"max_steps must be >= 1, got {max_steps}")
         if not 0 < done_coverage <= 1:
@@ -50,10 +56,12 @@ class ExplorationParallelEnv(ParallelEnv):  # type: ignore[misc]
         self.possible_agents = [f"robot_{i}" for i in range(self.sim_cfg.robots)]
         self.agents: list[str] = []
         H, W = truth.shape
-        self._obs_space = spaces.Dict({
-            "belief": spaces.Box(0, int(CellState.UNKNOWN), shape=(H, W), dtype=np.uint8),
-            "position_rc": spaces.Box(0, max(H, W) - 1, shape=(2,), dtype=np.int32),
-        })
+        self._obs_space = spaces.Dict(
+            {
+                "belief": spaces.Box(0, int(CellState.UNKNOWN), shape=(H, W), dtype=np.uint8),
+                "position_rc": spaces.Box(0, max(H, W) - 1, shape=(2,), dtype=np.int32),
+            }
+        )
         self._act_space = spaces.MultiDiscrete([H, W])
         self._sim: ExplorationSim | None = None
         self._goals = np.full((self.sim_cfg.robots, 2), -1, dtype=np.int64)
@@ -64,8 +72,9 @@ class ExplorationParallelEnv(ParallelEnv):  # type: ignore[misc]
     def action_space(self, agent: str) -> spaces.Space:
         return self._act_space
 
-    def reset(self, seed: int | None = None, options: dict[str, Any] | None = None
-              ) -> tuple[dict[str, Any], dict[str, Any]]:
+    def reset(
+        self, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, Any], dict[str, Any]]:
         rng = np.random.default_rng(seed)
         starts = (options or {}).get("starts_rc")
         if starts is None:
@@ -78,9 +87,12 @@ class ExplorationParallelEnv(ParallelEnv):  # type: ignore[misc]
     def _observations(self) -> dict[str, Any]:
         sim = self._require_sim()
         return {
-            a: {"belief": sim.beliefs[i].state(self.sim_cfg.sensor),
-                "position_rc": sim.positions_rc[i].astype(np.int32)}
-            for i, a in enumerate(self.possible_agents) if a in self.agents
+            a: {
+                "belief": sim.beliefs[i].state(self.sim_cfg.sensor),
+                "position_rc": sim.positions_rc[i].astype(np.int32),
+            }
+            for i, a in enumerate(self.possible_agents)
+            if a in self.agents
         }
 
     def _require_sim(self) -> ExplorationSim:
@@ -95,8 +107,9 @@ class ExplorationParallelEnv(ParallelEnv):  # type: ignore[misc]
         sim.set_path(i, astar_path(passable, tuple(sim.positions_rc[i]), (int(goal[0]), int(goal[1]))))
         self._goals[i] = goal
 
-    def step(self, actions: dict[str, Any]) -> tuple[dict[str, Any], dict[str, float], dict[str, bool],
-                                                     dict[str, bool], dict[str, Any]]:
+    def step(
+        self, actions: dict[str, Any]
+    ) -> tuple[dict[str, Any], dict[str, float], dict[str, bool], dict[str, bool], dict[str, Any]]:
         sim = self._require_sim()
         for i, a in enumerate(self.possible_agents):
             if a in actions and a in self.agents:
@@ -104,19 +117,27 @@ class ExplorationParallelEnv(ParallelEnv):  # type: ignore[misc]
                 if not np.array_equal(goal, self._goals[i]) or sim.path_ahead_blocked(i):
                     self._plan(i, goal)
         result = sim.step()
-        cell_m2 = self.truth.resolution_m ** 2
+        cell_m2 = self.truth.resolution_m**2
         r = self.sim_cfg.reward
         reward = float(r.time_reward + r.area_weight * result.new_known_cells * cell_m2)
         terminated = sim.coverage >= self.done_coverage
         truncated = sim.steps >= self.max_steps and not terminated
         obs = self._observations()
         agents = list(self.agents)
-        infos = {a: {"coverage": sim.coverage, "goal_reachable": len(sim.paths[i]) > 0}
-                 for i, a in enumerate(self.possible_agents) if a in agents}
+        infos = {
+            a: {"coverage": sim.coverage, "goal_reachable": len(sim.paths[i]) > 0}
+            for i, a in enumerate(self.possible_agents)
+            if a in agents
+        }
         if terminated or truncated:
             self.agents = []
-        return (obs, {a: reward for a in agents}, {a: terminated for a in agents},
-                {a: truncated for a in agents}, infos)
+        return (
+            obs,
+            {a: reward for a in agents},
+            {a: terminated for a in agents},
+            {a: truncated for a in agents},
+            infos,
+        )
 
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array":

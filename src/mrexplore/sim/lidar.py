@@ -12,7 +12,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["ray_count", "ray_directions", "cast_ray", "scan_update"]
+__all__ = ["ray_count", "ray_directions", "cast_ray", "scan_mark", "apply_scan", "scan_update"]
 
 _MISS = 1
 _HIT = 2
@@ -40,8 +40,15 @@ def _first_step(pos: float, cell: int, d: float) -> tuple[int, float, float]:  #
 
 @nb.njit(cache=True)
 def cast_ray(
-    occupied: np.ndarray, sr: int, sc: int, dr: float, dc: float, range_cells: float,
-    buf_r: np.ndarray, buf_c: np.ndarray, buf_t: np.ndarray,
+    occupied: np.ndarray,
+    sr: int,
+    sc: int,
+    dr: float,
+    dc: float,
+    range_cells: float,
+    buf_r: np.ndarray,
+    buf_c: np.ndarray,
+    buf_t: np.ndarray,
 ) -> tuple[int, bool]:  # pragma: no cover - numba
     """Cells crossed by one beam from the centre of ``(sr, sc)``, in order (Amanatides-Woo traversal).
 
@@ -78,15 +85,113 @@ def cast_ray(
 
 
 @nb.njit(cache=True, nogil=True)
-def scan_update(
-    occupied: np.ndarray, sr: int, sc: int, dirs: np.ndarray, range_cells: float, noise_cells: np.ndarray,
-    log_odds: np.ndarray, observed: np.ndarray, team_observed: np.ndarray, explorable: np.ndarray,
-    l_hit: float, l_miss: float, l_min: float, l_max: float, mark: np.ndarray, touched: np.ndarray,
-) -> tuple[int, int]:  # pragma: no cover - numba
-    """Cast every beam from ``(sr, sc)`` and fuse the scan into one robot's belief, in place.
+def scan_mark(
+    occupied: np.ndarray,
+    sr: int,
+    sc: int,
+    dirs: np.ndarray,
+    range_cells: float,
+    noise_cells: np.ndarray,
+    mark: np.ndarray,
+) -> tuple[int, int, int, int]:  # pragma: no cover - numba
+    """Cast every beam from ``(sr, sc)``; mark each cell crossed (1) or where a beam ended (2).
 
-    Log-odds form of paper eq. 1 with a uniform prior: ``l += logit(p_hit)`` where a beam ends and
-    ``l += logit(p_miss)`` where it passes, clamped to ``[l_min, l_max]``.
+    ``mark`` is ``(H, W) int8`` scratch, all zeros on entry. Returns the window ``(r0, r1, c0, c1)``
+    (half-open) holding every mark. Touches no belief, so robots can scan in parallel;
+    :func:`apply_scan` then fuses the marks.
+    """
+    r0, r1, c0, c1 = sr, sr + 1, sc, sc + 1
+    buf_len = int(4 * range_cells) + 8
+    buf_r = np.empty(buf_len, dtype=np.int64)
+    buf_c = np.empty(buf_len, dtype=np.int64)
+    buf_t = np.empty(buf_len, dtype=np.float64)
+    for k in range(dirs.shape[0]):
+        n, hit = cast_ray(occupied, sr, sc, dirs[k, 0], dirs[k, 1], range_cells, buf_r, buf_c, buf_t)
+        end = n - 1
+        if hit and noise_cells[k] < 0.0:
+            # A short reading ends the beam inside free space; a long one cannot pass the wall.
+            measured = buf_t[end] + noise_cells[k]
+            while end > 0 and buf_t[end] > measured:
+                end -= 1
+        for i in range(end + 1):
+            r = buf_r[i]
+            c = buf_c[i]
+            v = _HIT if (hit and i == end) else _MISS
+            if v > mark[r, c]:
+                mark[r, c] = v
+        # The last cell kept is the farthest one of the beam: it bounds the window.
+        r = buf_r[end]
+        c = buf_c[end]
+        r0 = min(r0, r)
+        r1 = max(r1, r + 1)
+        c0 = min(c0, c)
+        c1 = max(c1, c + 1)
+    return r0, r1, c0, c1
+
+
+@nb.njit(cache=True, nogil=True)
+def apply_scan(
+    mark: np.ndarray,
+    window: tuple[int, int, int, int],
+    log_odds: np.ndarray,
+    observed: np.ndarray,
+    team_observed: np.ndarray,
+    explorable: np.ndarray,
+    l_hit: float,
+    l_miss: float,
+    l_min: float,
+    l_max: float,
+) -> tuple[int, int]:  # pragma: no cover - numba
+    """Fuse one scan's marks into a robot's belief (log-odds form of paper eq. 1), in place; clear the marks.
+
+    With a uniform prior, ``l += logit(p_hit)`` where a beam ended and ``l += logit(p_miss)`` where it
+    passed, clamped to ``[l_min, l_max]``.
+
+    Returns
+    -------
+    ``(robot_new, team_new)``: explorable cells this robot, and the team, observed for the first time.
+    """
+    robot_new = 0
+    team_new = 0
+    r0, r1, c0, c1 = window
+    # Sweep the window row-major: sequential memory access beats visiting cells in beam order.
+    for r in range(r0, r1):
+        for c in range(c0, c1):
+            m = mark[r, c]
+            if m == 0:
+                continue
+            val = log_odds[r, c] + (l_hit if m == _HIT else l_miss)
+            log_odds[r, c] = min(max(val, l_min), l_max)
+            mark[r, c] = 0
+            if not observed[r, c]:
+                observed[r, c] = True
+                if explorable[r, c]:
+                    robot_new += 1
+            if not team_observed[r, c]:
+                team_observed[r, c] = True
+                if explorable[r, c]:
+                    team_new += 1
+    return robot_new, team_new
+
+
+def scan_update(
+    occupied: np.ndarray,
+    sr: int,
+    sc: int,
+    dirs: np.ndarray,
+    range_cells: float,
+    noise_cells: np.ndarray,
+    log_odds: np.ndarray,
+    observed: np.ndarray,
+    team_observed: np.ndarray,
+    explorable: np.ndarray,
+    l_hit: float,
+    l_miss: float,
+    l_min: float,
+    l_max: float,
+    mark: np.ndarray,
+) -> tuple[int, int]:
+    """One robot's scan fused into its belief: :func:`scan_mark` then :func:`apply_scan`.
 
     Parameters
     ----------
@@ -102,50 +207,12 @@ def scan_update(
         ``(H, W) bool`` union of all robots' observed cells, updated in place.
     explorable:
         ``(H, W) bool`` cells that count for coverage.
-    mark, touched:
-        Scratch: ``(H, W) int8`` all zeros (left zero on return) and ``(>= H*W,) int64``.
+    mark:
+        Scratch: ``(H, W) int8`` all zeros (left zero on return).
 
     Returns
     -------
-    ``(robot_new, team_new)``: explorable cells this robot, and the team, observed for the first time.
+    ``(robot_new, team_new)`` as :func:`apply_scan`.
     """
-    buf_len = int(4 * range_cells) + 8
-    buf_r = np.empty(buf_len, dtype=np.int64)
-    buf_c = np.empty(buf_len, dtype=np.int64)
-    buf_t = np.empty(buf_len, dtype=np.float64)
-    n_touched = 0
-    for k in range(dirs.shape[0]):
-        n, hit = cast_ray(occupied, sr, sc, dirs[k, 0], dirs[k, 1], range_cells, buf_r, buf_c, buf_t)
-        end = n - 1
-        if hit and noise_cells[k] < 0.0:
-            # A short reading ends the beam inside free space; a long one cannot pass the wall.
-            measured = buf_t[end] + noise_cells[k]
-            while end > 0 and buf_t[end] > measured:
-                end -= 1
-        for i in range(end + 1):
-            r = buf_r[i]
-            c = buf_c[i]
-            v = _HIT if (hit and i == end) else _MISS
-            if mark[r, c] == 0:
-                touched[n_touched] = r * occupied.shape[1] + c
-                n_touched += 1
-            if v > mark[r, c]:
-                mark[r, c] = v
-    W = occupied.shape[1]
-    robot_new = 0
-    team_new = 0
-    for j in range(n_touched):
-        r = touched[j] // W
-        c = touched[j] - r * W
-        val = log_odds[r, c] + (l_hit if mark[r, c] == _HIT else l_miss)
-        log_odds[r, c] = min(max(val, l_min), l_max)
-        mark[r, c] = 0
-        if not observed[r, c]:
-            observed[r, c] = True
-            if explorable[r, c]:
-                robot_new += 1
-        if not team_observed[r, c]:
-            team_observed[r, c] = True
-            if explorable[r, c]:
-                team_new += 1
-    return robot_new, team_new
+    window = scan_mark(occupied, sr, sc, dirs, range_cells, noise_cells, mark)
+    return apply_scan(mark, window, log_odds, observed, team_observed, explorable, l_hit, l_miss, l_min, l_max)

@@ -53,9 +53,15 @@ class EpisodeMeasures:
     """``no_frontiers`` / ``no_reachable_frontiers`` (explored), or ``max_steps`` (budget ran out)."""
 
     @classmethod
-    def from_run(cls, curve: NDArray[np.float64], robot_coverage: NDArray[np.float64],
-                 path_len_m: NDArray[np.float64], plan_ms: list[float], wall_s: float,
-                 done_reason: str) -> EpisodeMeasures:
+    def from_run(
+        cls,
+        curve: NDArray[np.float64],
+        robot_coverage: NDArray[np.float64],
+        path_len_m: NDArray[np.float64],
+        plan_ms: list[float],
+        wall_s: float,
+        done_reason: str,
+    ) -> EpisodeMeasures:
         team = float(curve[-1])
         s90, s95, s99 = (steps_to_coverage(curve, lv) for lv in COVERAGE_MILESTONES)
         ms = np.asarray(plan_ms, dtype=np.float64)

@@ -28,7 +28,10 @@ def starts_from_xy(truth: GroundTruthMap, starts_xy: Sequence[WorldXY]) -> NDArr
 
 
 def draw_starts(
-    truth: GroundTruthMap, n_robots: int, spread_m: float, rng: np.random.Generator,
+    truth: GroundTruthMap,
+    n_robots: int,
+    spread_m: float,
+    rng: np.random.Generator,
     first_rc: tuple[int, int] | None = None,
 ) -> NDArray[np.int32]:
     """Draw ``n_robots`` distinct start cells close together.
@@ -48,7 +51,8 @@ def draw_starts(
         sizes = np.bincount(labels.ravel(), minlength=n + 1)
         sizes[0] = 0
         cells = np.argwhere(labels == int(np.argmax(sizes)))
-        first = tuple(int(v) for v in cells[rng.integers(len(cells))])
+        pick = cells[rng.integers(len(cells))]
+        first = (int(pick[0]), int(pick[1]))
     field = distance_field(free, first)
     radius = max(spread_m / truth.resolution_m, 1.0)
     while True:

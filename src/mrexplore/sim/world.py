@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,12 +13,13 @@ from numpy.typing import NDArray
 from mrexplore.config import SimConfig
 from mrexplore.maps.ground_truth import GroundTruthMap, explorable_region
 from mrexplore.sim.belief import Belief, logit
-from mrexplore.sim.lidar import ray_count, ray_directions, scan_update
+from mrexplore.sim.lidar import apply_scan, ray_count, ray_directions, scan_mark
 from mrexplore.types import BoolGrid
 
 __all__ = ["ExplorationSim", "StepResult"]
 
 _EMPTY_PATH = np.zeros((0, 2), dtype=np.int32)
+_POOL = ThreadPoolExecutor(max_workers=os.cpu_count() or 1, thread_name_prefix="mrexplore-lidar")
 
 
 @dataclass(frozen=True)
@@ -34,8 +37,10 @@ class StepResult:
 class ExplorationSim:
     """N point robots exploring a ground-truth grid, each with its own log-odds belief.
 
-    A step: every robot drives up to ``motion.step_m`` along its path (8-connected cells, straight moves
-    cost one cell, diagonal ones sqrt(2)), then scans. Distance not used in a step is not carried over.
+    A step: every robot drives ``motion.step_m`` along its path (8-connected cells, straight moves cost
+    one cell, diagonal ones sqrt(2)), then scans. A robot stands on cell centres; distance that does not
+    reach the next centre is carried into the next step while the robot follows the same path, so speed
+    is constant at any resolution (even cells larger than a step).
 
     Parameters
     ----------
@@ -49,8 +54,9 @@ class ExplorationSim:
         The one generator for sensor noise.
     """
 
-    def __init__(self, truth: GroundTruthMap, starts_rc: NDArray[np.integer], cfg: SimConfig,
-                 rng: np.random.Generator) -> None:
+    def __init__(
+        self, truth: GroundTruthMap, starts_rc: NDArray[np.integer], cfg: SimConfig, rng: np.random.Generator
+    ) -> None:
         self.truth = truth
         self.cfg = cfg
         self.rng = rng
@@ -65,6 +71,7 @@ class ExplorationSim:
         self.robot_known_cells = np.zeros(self.n_robots, dtype=np.int64)
         self.paths = [_EMPTY_PATH for _ in range(self.n_robots)]
         self._path_index = np.zeros(self.n_robots, dtype=np.int64)
+        self._carry_cells = np.zeros(self.n_robots, dtype=np.float64)
         self.steps = 0
         self.path_len_m = np.zeros(self.n_robots, dtype=np.float64)
         res = truth.resolution_m
@@ -72,12 +79,11 @@ class ExplorationSim:
         self._range_cells = s.range_m / res
         self._dirs = ray_directions(ray_count(self._range_cells, s.ray_oversampling))
         self._l = (logit(s.p_hit), logit(s.p_miss), logit(s.p_clamp_min), logit(s.p_clamp_max))
-        self._mark = np.zeros(shape, dtype=np.int8)
-        self._touched = np.empty(shape[0] * shape[1], dtype=np.int64)
+        # Per-robot scratch so that robots cast their beams in parallel (the kernel releases the GIL).
+        self._mark = [np.zeros(shape, dtype=np.int8) for _ in range(self.n_robots)]
         self._occupied = np.ascontiguousarray(truth.occupied)
         self._step_cells = cfg.motion.step_m / res
-        for i in range(self.n_robots):
-            self._sense(i)
+        self._sense_all()
 
     # -- paths -------------------------------------------------------------------------------------
     def set_path(self, robot: int, path_rc: NDArray[np.integer]) -> None:
@@ -87,10 +93,11 @@ class ExplorationSim:
             raise ValueError(f"path of robot {robot} must start at its cell {self.positions_rc[robot].tolist()}")
         self.paths[robot] = path
         self._path_index[robot] = 0
+        self._carry_cells[robot] = 0.0
 
     def remaining_path(self, robot: int) -> NDArray[np.int32]:
         """Cells still ahead of ``robot`` on its path, ``(k, 2) int32`` (its current cell first)."""
-        return self.paths[robot][self._path_index[robot]:]
+        return self.paths[robot][self._path_index[robot] :]
 
     def at_path_end(self, robot: int) -> bool:
         return len(self.paths[robot]) == 0 or self._path_index[robot] >= len(self.paths[robot]) - 1
@@ -103,8 +110,7 @@ class ExplorationSim:
         before = self.known_cells
         for i in range(self.n_robots):
             moved[i], blocked[i] = self._drive(i)
-        for i in range(self.n_robots):
-            self._sense(i)
+        self._sense_all()
         self.steps += 1
         self.path_len_m += moved
         return StepResult(self.known_cells - before, moved, blocked)
@@ -112,13 +118,15 @@ class ExplorationSim:
     def _drive(self, i: int) -> tuple[float, bool]:
         path = self.paths[i]
         k = int(self._path_index[i])
-        budget = self._step_cells
+        budget = self._step_cells + self._carry_cells[i]
+        self._carry_cells[i] = 0.0
         dist = 0.0
         while k + 1 < len(path):
             nxt = path[k + 1]
             cur = path[k]
             cost = math.sqrt(2.0) if (nxt[0] != cur[0] and nxt[1] != cur[1]) else 1.0
             if cost > budget + 1e-9:
+                self._carry_cells[i] = budget
                 break
             if self._occupied[nxt[0], nxt[1]]:
                 self._path_index[i] = k
@@ -130,20 +138,28 @@ class ExplorationSim:
         self._path_index[i] = k
         return dist * self.truth.resolution_m, False
 
-    def _sense(self, i: int) -> None:
-        b = self.beliefs[i]
+    def _sense_all(self) -> None:
+        """Every robot scans (beams cast in parallel), then the scans are fused in robot order."""
         noise_sd = self.cfg.sensor.range_noise_m / self.truth.resolution_m
-        if noise_sd > 0:
-            noise = self.rng.normal(0.0, noise_sd, size=len(self._dirs))
-        else:
-            noise = np.zeros(len(self._dirs))
-        r, c = self.positions_rc[i]
-        robot_new, team_new = scan_update(
-            self._occupied, int(r), int(c), self._dirs, self._range_cells, noise,
-            b.log_odds, b.observed, self.team_observed, self.explorable, *self._l, self._mark, self._touched,
-        )
-        self.robot_known_cells[i] += robot_new
-        self.known_cells += team_new
+        n_rays = len(self._dirs)
+        # Noise is drawn in robot order from the one generator, so results do not depend on threads.
+        noises = [
+            self.rng.normal(0.0, noise_sd, size=n_rays) if noise_sd > 0 else np.zeros(n_rays)
+            for _ in range(self.n_robots)
+        ]
+
+        def cast(i: int) -> tuple[int, int, int, int]:
+            r, c = self.positions_rc[i]
+            return scan_mark(self._occupied, int(r), int(c), self._dirs, self._range_cells, noises[i], self._mark[i])
+
+        windows = list(_POOL.map(cast, range(self.n_robots))) if self.n_robots > 1 else [cast(0)]
+        for i, window in enumerate(windows):
+            b = self.beliefs[i]
+            robot_new, team_new = apply_scan(
+                self._mark[i], window, b.log_odds, b.observed, self.team_observed, self.explorable, *self._l
+            )
+            self.robot_known_cells[i] += robot_new
+            self.known_cells += team_new
 
     # -- measures ----------------------------------------------------------------------------------
     @property

@@ -1,0 +1,86 @@
+"""Median milliseconds per simulation step and per planning decision on the largest HouseExpo map.
+
+Run: python perf/bench_step_and_decision.py [--steps 400] [--robots 3 8]
+Targets on the 2-core dev machine: sim <= 2 ms per step at 3 robots; a decision <= 50 ms median.
+A decision is the centre's whole work: fuse beliefs, closing, frontiers, Mean-Shift, one distance field
+per robot, assignment and paths. One is taken every 10 steps here, close to the rate missions show.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from mrexplore.config import SimConfig
+from mrexplore.maps.loaders import load_map
+from mrexplore.sim.starts import draw_starts
+from mrexplore.sim.world import ExplorationSim
+from mrexplore.strategies import make_strategy
+
+HOUSEEXPO = Path(__file__).resolve().parents[2] / "shared" / "maps" / "houseexpo"
+
+
+def largest_houseexpo() -> Path:
+    with open(HOUSEEXPO / "index.csv") as f:
+        rows = list(csv.DictReader(f))
+    best = max(rows, key=lambda r: np.prod([int(v) for v in r["cells_at_0.05m"].split("x")]))
+    return HOUSEEXPO / best["file"]
+
+
+def bench(map_path: Path, robots: int, steps: int, strategy: str) -> dict[str, float]:
+    truth = load_map(map_path)
+    rng = np.random.default_rng(0)
+    cfg = SimConfig(robots=robots)
+    sim = ExplorationSim(truth, draw_starts(truth, robots, cfg.start_spread_m, rng), cfg, rng)
+    pipeline = make_strategy(strategy)
+    step_ms, plan_ms = [], []
+    for k in range(steps):
+        if k % 10 == 0:
+            t = time.perf_counter()
+            state = pipeline.centre_state(sim.beliefs, cfg.sensor)
+            d = pipeline.decide(state, sim.positions_rc.copy(), truth.resolution_m)
+            plan_ms.append((time.perf_counter() - t) * 1e3)
+            if d.done_reason is not None:
+                break
+            for i in range(robots):
+                sim.set_path(i, d.paths[i])
+        t = time.perf_counter()
+        sim.step()
+        step_ms.append((time.perf_counter() - t) * 1e3)
+    return {
+        "cells": truth.shape[0] * truth.shape[1],
+        "coverage": sim.coverage,
+        "step_ms_median": float(np.median(step_ms)),
+        "step_ms_p95": float(np.percentile(step_ms, 95)),
+        "decision_ms_median": float(np.median(plan_ms)),
+        "decision_ms_p95": float(np.percentile(plan_ms, 95)),
+    }
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=400)
+    ap.add_argument("--robots", type=int, nargs="+", default=[3, 8])
+    ap.add_argument("--strategy", default="utility")
+    args = ap.parse_args()
+    if not HOUSEEXPO.is_dir():
+        print(f"skipped: HouseExpo maps not found at {HOUSEEXPO}", file=sys.stderr)
+        return 0
+    path = largest_houseexpo()
+    bench(path, 2, 20, args.strategy)  # compile the numba kernels outside the timings
+    print(f"map {path.stem} ({args.strategy}, {args.steps} steps, a decision every 10 steps)")
+    print("robots  cells    coverage  step ms (median / p95)  decision ms (median / p95)")
+    for n in args.robots:
+        r = bench(path, n, args.steps, args.strategy)
+        print(f"{n:6d}  {r['cells']:7d}  {r['coverage']:8.3f}  {r['step_ms_median']:8.2f} / {r['step_ms_p95']:6.2f}"
+              f"       {r['decision_ms_median']:8.2f} / {r['decision_ms_p95']:6.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,97 @@
+"""Distance fields and A*: hand-checked grids and a plain Dijkstra reference."""
+
+from __future__ import annotations
+
+import heapq
+import math
+
+import numpy as np
+import pytest
+from conftest import bool_grid
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from mrexplore.paths.astar import astar_path, path_length_cells
+from mrexplore.paths.distance_field import distance_field
+
+
+def reference_dijkstra(passable: np.ndarray, src: tuple[int, int]) -> np.ndarray:
+    """Plain heapq Dijkstra with the same moves: 8-connected, diagonal only if both sides are free."""
+    H, W = passable.shape
+    dist = np.full((H, W), np.inf)
+    if not passable[src]:
+        return dist
+    dist[src] = 0.0
+    heap = [(0.0, src)]
+    while heap:
+        d, (r, c) = heapq.heappop(heap)
+        if d > dist[r, c]:
+            continue
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                rr, cc = r + dr, c + dc
+                if (dr, dc) == (0, 0) or not (0 <= rr < H and 0 <= cc < W) or not passable[rr, cc]:
+                    continue
+                if dr and dc and not (passable[r, cc] and passable[rr, c]):
+                    continue
+                nd = d + (math.sqrt(2) if dr and dc else 1.0)
+                if nd < dist[rr, cc]:
+                    dist[rr, cc] = nd
+                    heapq.heappush(heap, (nd, (rr, cc)))
+    return dist
+
+
+def test_field_by_hand_and_no_corner_cutting() -> None:
+    free = ~bool_grid("""
+        ....
+        .#..
+        ..#.
+        ....
+    """)
+    d = distance_field(free, (0, 0))
+    assert d[0, 3] == 3.0  # straight along the top row
+    # (0,1) -> (1,2) would cut the corner of the wall at (1,1): forbidden, so go (0,2) -> (1,2).
+    assert d[1, 2] == pytest.approx(3.0)
+    # (1,0) -> (2,1) would cut (1,1) as well: down the left column instead.
+    assert d[2, 1] == pytest.approx(3.0)
+    # (3,3): down to (2,0), diagonal to (3,1) (sides (2,1) and (3,0) free), then right twice.
+    assert d[3, 3] == pytest.approx(4 + math.sqrt(2))
+
+
+def test_unreachable_is_inf_and_blocked_source_all_inf() -> None:
+    free = ~bool_grid("""
+        .#.
+        .#.
+    """)
+    d = distance_field(free, (0, 0))
+    assert d[1, 0] == 1.0 and np.isinf(d[0, 2])
+    assert np.isinf(distance_field(free, (0, 1))).all()
+
+
+@settings(max_examples=60, deadline=None)
+@given(arrays(np.bool_, st.tuples(st.integers(1, 14), st.integers(1, 14)), elements=st.booleans()), st.data())
+def test_field_matches_reference_dijkstra(passable: np.ndarray, data: st.DataObject) -> None:
+    src = (data.draw(st.integers(0, passable.shape[0] - 1)), data.draw(st.integers(0, passable.shape[1] - 1)))
+    np.testing.assert_allclose(distance_field(passable, src), reference_dijkstra(passable, src), rtol=1e-6)
+
+
+@settings(max_examples=60, deadline=None)
+@given(arrays(np.bool_, st.tuples(st.integers(2, 14), st.integers(2, 14)), elements=st.booleans()), st.data())
+def test_astar_is_optimal_and_valid(passable: np.ndarray, data: st.DataObject) -> None:
+    H, W = passable.shape
+    a = (data.draw(st.integers(0, H - 1)), data.draw(st.integers(0, W - 1)))
+    b = (data.draw(st.integers(0, H - 1)), data.draw(st.integers(0, W - 1)))
+    path = astar_path(passable, a, b)
+    ref = reference_dijkstra(passable, a)[b]
+    if not np.isfinite(ref):
+        assert path.shape == (0, 2)
+        return
+    assert path[0].tolist() == list(a) and path[-1].tolist() == list(b)
+    assert passable[path[:, 0], path[:, 1]].all()
+    steps = np.diff(path, axis=0)
+    assert (np.abs(steps).max(axis=1) == 1).all()
+    for (r, c), (dr, dc) in zip(path[:-1], steps, strict=True):
+        if dr and dc:
+            assert passable[r, c + dc] and passable[r + dr, c]
+    assert path_length_cells(path) == pytest.approx(ref)

@@ -1,0 +1,67 @@
+"""Mean-Shift clustering: hand-checked clusters, the bandwidth rule, and equality with scikit-learn."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.distance import pdist
+from sklearn.cluster import MeanShift
+
+from mrexplore.config import PreprocessConfig
+from mrexplore.preprocessing.clustering import adaptive_bandwidth, cluster_frontiers, mean_shift
+
+
+def test_two_frontier_segments_and_a_stray_cell() -> None:
+    # Two 5-cell segments far apart and one isolated cell: the stray forms a 1-member cluster, dropped.
+    seg_a = [[2, c] for c in range(10, 15)]
+    seg_b = [[r, 40] for r in range(20, 25)]
+    pts = np.array(seg_a + seg_b + [[40, 5]])
+    c = cluster_frontiers(pts, PreprocessConfig())
+    assert c.centers_rc.tolist() == [[2, 12], [22, 40]]
+    assert c.sizes.tolist() == [5, 5]
+    assert c.members_of(0).tolist() == seg_a
+    assert c.members_of(1).tolist() == seg_b
+
+
+def test_min_cluster_size_one_keeps_singletons() -> None:
+    c = cluster_frontiers(np.array([[0, 0], [0, 1], [30, 30]]), PreprocessConfig(min_cluster_size=1))
+    assert c.sizes.tolist() == [2, 1]
+
+
+def test_fewer_than_two_points() -> None:
+    assert len(cluster_frontiers(np.zeros((0, 2), int), PreprocessConfig())) == 0
+    assert len(cluster_frontiers(np.array([[3, 3]]), PreprocessConfig())) == 0
+
+
+def test_bandwidth_is_percentile_of_pairwise_distances() -> None:
+    pts = np.array([[0.0, 0.0], [0.0, 3.0], [4.0, 0.0]])  # distances 3, 4, 5
+    assert adaptive_bandwidth(pts, 50, 100) == 4.0
+    assert adaptive_bandwidth(pts, 15, 100) == pytest.approx(3.3)
+
+
+@pytest.mark.filterwarnings("ignore:Binning data failed")
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10**6), st.integers(2, 300), st.integers(4, 120), st.booleans())
+def test_mean_shift_equals_sklearn(seed: int, n: int, extent: int, tie_free: bool) -> None:
+    rng = np.random.default_rng(seed)
+    pts = np.unique(rng.integers(0, extent, (n, 2)), axis=0).astype(float)
+    if len(pts) < 2:
+        return
+    bw = max(float(np.percentile(pdist(pts), 15)), 1.0) + (0.37 if tie_free else 0.0)
+    ref = MeanShift(bandwidth=bw, bin_seeding=True).fit(pts)
+    modes, labels = mean_shift(pts, bw)
+    np.testing.assert_allclose(modes, ref.cluster_centers_)
+    np.testing.assert_array_equal(labels, ref.labels_)
+
+
+def test_centres_are_members() -> None:
+    rng = np.random.default_rng(0)
+    ring = np.array([[int(20 + 15 * np.sin(a)), int(20 + 15 * np.cos(a))] for a in np.linspace(0, 6.2, 80)])
+    pts = np.unique(np.vstack([ring, rng.integers(60, 90, (40, 2))]), axis=0)
+    c = cluster_frontiers(pts, PreprocessConfig())
+    members = {tuple(p) for p in pts.tolist()}
+    assert all(tuple(ctr) in members for ctr in c.centers_rc.tolist())
+    for k in range(len(c)):
+        assert c.sizes[k] == len(c.members_of(k)) and tuple(c.centers_rc[k]) in map(tuple, c.members_of(k))

@@ -1,0 +1,75 @@
+"""Whole missions: termination criteria, seeded determinism, the step budget, and one decision by hand."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import state_grid
+
+from mrexplore.config import MapConfig, MissionConfig, SimConfig
+from mrexplore.maps.loaders import load_map
+from mrexplore.mission import run_mission
+from mrexplore.strategies import make_strategy
+from mrexplore.types import MrExploreError
+
+TIMING_KEYS = {"wall_s", "plan_ms_mean", "plan_ms_p95"}
+
+
+@pytest.fixture(scope="module")
+def small_map():
+    return load_map("generated:3", MapConfig(resolution_m=0.1))
+
+
+@pytest.mark.parametrize("strategy", ["nearest", "utility"])
+def test_mission_explores_the_map(small_map, strategy: str) -> None:
+    m = run_mission(small_map, make_strategy(strategy), SimConfig(robots=2), seed=1).measures
+    assert m.coverage >= 0.99
+    assert m.done_reason in {"no_frontiers", "no_reachable_frontiers"}
+    assert m.steps_to_90 is not None and m.steps_to_90 <= m.steps
+    assert m.path_len_max_m <= m.path_len_sum_m and m.decisions >= 1
+
+
+def test_same_seed_same_result_other_seed_other_result(small_map) -> None:
+    runs = [run_mission(small_map, make_strategy("utility"), seed=s).measures.to_dict() for s in (4, 4, 5)]
+    strip = [{k: v for k, v in r.items() if k not in TIMING_KEYS} for r in runs]
+    assert strip[0] == strip[1]
+    assert strip[0] != strip[2]
+
+
+def test_budget_ends_as_max_steps_never_success(small_map) -> None:
+    res = run_mission(small_map, make_strategy("nearest"), mission_cfg=MissionConfig(max_steps=5), seed=0)
+    assert res.measures.done_reason == "max_steps" and res.measures.steps == 5
+    assert len(res.coverage_curve) == 6
+
+
+def test_wrong_number_of_starts_refused(small_map) -> None:
+    with pytest.raises(MrExploreError, match=r"starts must give one cell per robot \(3\), got 1"):
+        run_mission(small_map, make_strategy("nearest"), starts_rc=np.array([[5, 5]]))
+
+
+def test_one_decision_by_hand() -> None:
+    # Two robots in a corridor, unknown at both ends: each end is a 3-cell frontier cluster.
+    state = state_grid("""
+        #########
+        ?.......?
+        ?.......?
+        ?.......?
+        #########
+    """)
+    pipeline = make_strategy("utility")
+    d = pipeline.decide(state, np.array([[2, 2], [2, 6]], np.int32), 0.05)
+    assert d.done_reason is None
+    assert d.clusters.centers_rc.tolist() == [[2, 1], [2, 7]] and d.clusters.sizes.tolist() == [3, 3]
+    assert d.goals_rc.tolist() == [[2, 1], [2, 7]]  # each robot takes the end nearer to it
+    assert d.paths[0].tolist() == [[2, 2], [2, 1]]
+    assert d.paths[1].tolist() == [[2, 6], [2, 7]]
+
+
+def test_no_frontier_ends_the_mission_by_decision() -> None:
+    state = state_grid("""
+        #####
+        #...#
+        #####
+    """)
+    d = make_strategy("nearest").decide(state, np.array([[1, 1]], np.int32), 0.05)
+    assert d.done_reason == "no_frontiers"
