@@ -77,8 +77,10 @@ def main() -> int:
     print("robots  cells    coverage  step ms (median / p95)  decision ms (median / p95)")
     for n in args.robots:
         r = bench(path, n, args.steps, args.strategy)
-        print(f"{n:6d}  {r['cells']:7d}  {r['coverage']:8.3f}  {r['step_ms_median']:8.2f} / {r['step_ms_p95']:6.2f}"
-              f"       {r['decision_ms_median']:8.2f} / {r['decision_ms_p95']:6.2f}")
+        print(
+            f"{n:6d}  {r['cells']:7d}  {r['coverage']:8.3f}  {r['step_ms_median']:8.2f} / {r['step_ms_p95']:6.2f}"
+            f"       {r['decision_ms_median']:8.2f} / {r['decision_ms_p95']:6.2f}"
+        )
     return 0
 
 

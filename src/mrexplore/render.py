@@ -68,16 +68,17 @@ def render_frame(
     if clusters is not None and len(clusters):
         colours = np.array(_CLUSTER_COLOURS, dtype=np.uint8)[clusters.labels % len(_CLUSTER_COLOURS)]
         rgb[clusters.members_rc[:, 0], clusters.members_rc[:, 1]] = colours
-    for i, trail in enumerate(trails):
-        if len(trail):
-            light = tuple(int(v + (255 - v) * 0.55) for v in _robot_colour(i))
-            rgb[trail[:, 0], trail[:, 1]] = light
     img = Image.fromarray(rgb)
     if scale != 1.0:
         size = (max(1, round(img.width * scale)), max(1, round(img.height * scale)))
         img = img.resize(size, Image.Resampling.BOX if scale < 1 else Image.Resampling.NEAREST)
     draw = ImageDraw.Draw(img)
     rad = max(2.0, 3.0 * max(scale, 0.5))
+    for i, trail in enumerate(trails):
+        if len(trail) > 1:
+            light = tuple(int(v + (255 - v) * 0.45) for v in _robot_colour(i))
+            xy = [((c + 0.5) * scale, (r + 0.5) * scale) for r, c in np.asarray(trail)]
+            draw.line(xy, fill=light, width=max(1, round(scale)))
     for i, (r, c) in enumerate(np.asarray(goals_rc)):
         if r < 0:
             continue
