@@ -47,7 +47,7 @@ def test_human_summary_and_pictures(tmp_path, capsys) -> None:
     gif, png = tmp_path / "run.gif", tmp_path / "final.png"
     assert main(["explore", *FAST, "--gif", str(gif), "--png", str(png)]) == 0
     out = capsys.readouterr().out
-    assert out.startswith("explored generated:3 with 2 robots (utility, seed 0)")
+    assert out.startswith("explored generated:3 with 2 robots (hier, seed 0)")
     with Image.open(gif) as g:
         assert g.n_frames > 3
     assert Image.open(png).size[0] >= 400
@@ -67,7 +67,7 @@ def test_given_starts(capsys) -> None:
             ["--map", "missing.yaml"],
             "mrexplore: error: map file not found: missing.yaml; pass an existing map file with --map",
         ),
-        (["--strategy", "greedy"], "mrexplore: error: unknown strategy 'greedy'; choose one of nearest, utility"),
+        (["--strategy", "greedy"], "mrexplore: error: unknown strategy 'greedy'; choose one of hier, nearest, utility"),
         (
             ["--start", "0.01,0.01"],
             "mrexplore: error: start (0.01, 0.01) lies inside a wall; give --start X,Y on free space",

@@ -21,7 +21,7 @@ from mrexplore.types import MrExploreError
 __all__ = ["main", "build_parser"]
 
 EXIT_BAD_INPUT = 2
-DEFAULT_STRATEGY = "utility"
+DEFAULT_STRATEGY = "hier"
 
 
 class _Parser(argparse.ArgumentParser):
@@ -53,6 +53,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--strategy",
         default=DEFAULT_STRATEGY,
         help=f"one of {', '.join(strategy_names())} (default {DEFAULT_STRATEGY})",
+    )
+    ex.add_argument(
+        "--no-local", action="store_true", help="turn the local routing layer off: robots go to cluster centres"
     )
     ex.add_argument("--seed", type=int, default=0, help="seed of starts and sensor noise (default 0)")
     ex.add_argument("--max-steps", type=int, default=MissionConfig.max_steps, help="step budget (default 20000)")
@@ -88,7 +91,7 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
     map_cfg = MapConfig(resolution_m=args.resolution, pixel_size_m=args.pixel_size)
     sim_cfg = SimConfig(robots=args.robots)
     mission_cfg = MissionConfig(max_steps=args.max_steps)
-    strategy = make_strategy(args.strategy)
+    strategy = make_strategy(args.strategy, local=not args.no_local)
     truth = load_map(args.map, map_cfg)
     starts = None
     if args.start:
@@ -127,6 +130,7 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
             "sim": config_to_dict(sim_cfg),
             "mission": config_to_dict(mission_cfg),
             "preprocess": config_to_dict(strategy.preprocess),
+            "local": config_to_dict(strategy.local.cfg) if strategy.local is not None else None,
         },
     }
     return record

@@ -21,6 +21,7 @@ __all__ = [
     "RewardConfig",
     "PreprocessConfig",
     "GlobalPlanningConfig",
+    "LocalPlanningConfig",
     "MissionConfig",
     "config_to_dict",
 ]
@@ -157,6 +158,43 @@ class GlobalPlanningConfig:
     def __post_init__(self) -> None:
         _require(self.distance_weight >= 0, "distance_weight", ">= 0", self.distance_weight)
         _require(self.size_weight >= 0, "size_weight", ">= 0", self.size_weight)
+
+
+@dataclass(frozen=True)
+class LocalPlanningConfig:
+    """Layer 3: routing inside the assigned cluster (paper IV-C, eqs. 10-11)."""
+
+    theta_members: int = 40
+    """Route inside a cluster only when it has more members than this (paper's threshold theta; the paper
+    gives no value: 40 members is 2 m of frontier at 0.05 m), >= 1."""
+    k_g: float = 1.0
+    """Rate of the gain normalisation of eq. 11 (paper: 1), > 0."""
+    k_l: float = 1.0
+    """Rate of the cost normalisation of eq. 11 (paper: 1), > 0."""
+    upper_gain: float = 5.0
+    """U_G, upper limit of the normalised gain (paper: 5), > 0."""
+    upper_cost: float = 5.0
+    """U_L, upper limit scale of the normalised cost (paper: 5), > 0."""
+    c: float = 1.0
+    """Balance factor of eq. 10 between gain and accumulated travel cost (paper: 1), >= 0."""
+    epsilon: float = 1e-6
+    """Guard against division by zero in eq. 11, > 0."""
+    sub_bandwidth_m: float | None = None
+    """Mean-Shift bandwidth of the sub-clustering, metres; None: the 15th-percentile rule of layer 1."""
+    max_candidates: int = 30
+    """At most this many sub-clusters (the largest) enter the route, >= 1."""
+    margin_m: float = 2.0
+    """Distances between candidates are computed on the box around robot and cluster grown by this, m, >= 0."""
+
+    def __post_init__(self) -> None:
+        _require(self.theta_members >= 1, "theta_members", ">= 1", self.theta_members)
+        for name in ("k_g", "k_l", "upper_gain", "upper_cost", "epsilon"):
+            _require(getattr(self, name) > 0, name, "> 0", getattr(self, name))
+        _require(self.c >= 0, "c", ">= 0", self.c)
+        if self.sub_bandwidth_m is not None:
+            _require(self.sub_bandwidth_m > 0, "sub_bandwidth_m", "> 0 metres or None", self.sub_bandwidth_m)
+        _require(self.max_candidates >= 1, "max_candidates", ">= 1", self.max_candidates)
+        _require(self.margin_m >= 0, "margin_m", ">= 0 metres", self.margin_m)
 
 
 @dataclass(frozen=True)

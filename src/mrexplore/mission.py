@@ -2,7 +2,9 @@
 
 Replanning is the same for every strategy. A decision (the whole team re-assigned at the centre) is
 taken when a robot reached its goal, when its goal is no longer a frontier, when its path is blocked,
-and at least every ``replan_every_steps`` steps. The mission ends as the paper's: no cluster of the
+and at least every ``replan_every_steps`` steps. A robot with a local route (paper IV-C) first moves on
+to the next target of its route that is still a frontier; only when none is left does its goal count
+as reached. The mission ends as the paper's: no cluster of the
 minimum size left, or none reachable; or when the step budget runs out (``max_steps``, never success).
 """
 
@@ -19,11 +21,12 @@ from tqdm import tqdm
 
 from mrexplore.config import MissionConfig, SimConfig
 from mrexplore.maps.ground_truth import GroundTruthMap
+from mrexplore.paths.astar import astar_path
 from mrexplore.sim.measures import EpisodeMeasures
 from mrexplore.sim.starts import draw_starts
 from mrexplore.sim.world import ExplorationSim
 from mrexplore.strategies import NO_GOAL, Decision, ExplorationPipeline
-from mrexplore.types import MrExploreError
+from mrexplore.types import CellState, MrExploreError
 
 __all__ = ["MissionResult", "run_mission", "Observer"]
 
@@ -95,6 +98,23 @@ def run_mission(
     show = sys.stderr.isatty() if progress is None else progress
     bar = tqdm(total=100, unit="%", desc=f"{strategy.name} {truth.name}", disable=not show, leave=False)
     blocked = np.zeros(n, dtype=bool)
+    no_route = np.zeros((0, 2), dtype=np.int32)
+    routes = [no_route] * n  # targets after the current goal
+    passable = state == CellState.FREE
+
+    def advance(i: int) -> bool:
+        """Move robot i on to the next target of its route; False when the route is used up."""
+        while len(routes[i]):
+            target, routes[i] = routes[i][0], routes[i][1:]
+            if blacklist[target[0], target[1]] or not _goal_still_frontier(sim.team_observed, target):
+                continue
+            path = astar_path(passable, tuple(sim.positions_rc[i]), tuple(target))
+            if len(path):
+                goals[i] = target
+                sim.set_path(i, path)
+                return True
+        return False
+
     if observer:
         observer(sim, decision, goals)
     while True:
@@ -110,12 +130,8 @@ def run_mission(
                 and _goal_still_frontier(sim.team_observed, goals[i])
             ):
                 blacklist[goals[i, 0], goals[i, 1]] = True  # stood on it and it stayed a frontier
-            if (
-                reached
-                or blocked[i]
-                or not _goal_still_frontier(sim.team_observed, goals[i])
-                or sim.path_ahead_blocked(i)
-            ):
+            resolved = reached or not _goal_still_frontier(sim.team_observed, goals[i])
+            if blocked[i] or sim.path_ahead_blocked(i) or (resolved and not advance(i)):
                 need = True
         if need:
             t = time.perf_counter()
@@ -127,8 +143,10 @@ def run_mission(
                 done_reason = decision.done_reason
                 break
             goals = decision.goals_rc.copy()
+            passable = decision.state == CellState.FREE
             for i in range(n):
                 sim.set_path(i, decision.paths[i])
+                routes[i] = decision.routes[i][1:]
                 if len(decision.paths[i]) == 0:
                     goals[i] = NO_GOAL
         if sim.steps >= mission_cfg.max_steps:

@@ -1,4 +1,4 @@
-"""Named complete pipelines (preprocessing -> global assignment -> goal per robot) for the CLI and the bench."""
+"""Named complete pipelines (preprocessing -> global assignment -> local routing) for the CLI and the bench."""
 
 from __future__ import annotations
 
@@ -8,9 +8,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.config import GlobalPlanningConfig, PreprocessConfig, SensorConfig
+from mrexplore.config import GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig, SensorConfig
 from mrexplore.global_planning.classical import NearestPlanner, UtilityPlanner
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem, GlobalPlanner
+from mrexplore.local_planning.router import LocalRouter
 from mrexplore.paths.distance_field import descend_path, distance_fields, distances_at
 from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers
 from mrexplore.preprocessing.frontiers import Frontiers, close_unknown_holes, detect_frontiers
@@ -36,6 +37,9 @@ class Decision:
         Layer 2 output.
     goals_rc:
         ``(n_robots, 2) int32`` goal cell per robot; ``(-1, -1)`` for none.
+    routes:
+        One ``(m, 2) int32`` ordered list of targets per robot; the first is its goal. Longer than one
+        where the local layer routed through sub-clusters (paper IV-C).
     paths:
         One ``(k, 2) int32`` path per robot from its cell to its goal (empty for none).
     done_reason:
@@ -48,17 +52,23 @@ class Decision:
     clusters: Clusters
     assignment: Assignment
     goals_rc: NDArray[np.int32]
+    routes: list[NDArray[np.int32]]
     paths: list[NDArray[np.int32]]
     done_reason: str | None
 
 
 @dataclass
 class ExplorationPipeline:
-    """A complete strategy: the centre's preprocessing, a global planner, and the goal of each robot."""
+    """A complete strategy: the centre's preprocessing, a global planner, and optionally local routing.
+
+    Without a local router a robot's goal is its cluster's centre; with one, a cluster of more than theta
+    members is split into sub-clusters and the robot follows the best route through them.
+    """
 
     name: str
     planner: GlobalPlanner
     preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
+    local: LocalRouter | None = None
 
     def centre_state(self, beliefs: list[Belief], sensor: SensorConfig) -> StateGrid:
         """The centre's grid: the robots' beliefs fused, then denoised by closing (paper IV-A)."""
@@ -88,31 +98,43 @@ class ExplorationPipeline:
         no_paths = [np.zeros((0, 2), np.int32) for _ in range(n)]
         goals = np.tile(NO_GOAL, (n, 1))
         if len(clusters) == 0:
-            return Decision(state, frontiers, clusters, empty, goals, no_paths, "no_frontiers")
+            return Decision(state, frontiers, clusters, empty, goals, no_paths, no_paths, "no_frontiers")
         if not np.isfinite(dist).any():
-            return Decision(state, frontiers, clusters, empty, goals, no_paths, "no_reachable_frontiers")
+            return Decision(state, frontiers, clusters, empty, goals, no_paths, no_paths, "no_reachable_frontiers")
         problem = AssignmentProblem(np.asarray(robots_rc, np.int32), clusters, dist, resolution_m, state)
         assignment = self.planner.assign(problem)
-        paths = []
+        paths, routes = [], []
         for i, k in enumerate(assignment.cluster_of_robot):
             if k == UNASSIGNED:
                 paths.append(no_paths[i])
+                routes.append(no_paths[i])
                 continue
-            goals[i] = clusters.centers_rc[k]
+            route = None
+            if self.local is not None and self.local.applies(int(clusters.sizes[k])):
+                route = self.local.route(passable, tuple(robots_rc[i]), fields[i], clusters.members_of(k), resolution_m)
+            targets = route.targets_rc if route is not None else clusters.centers_rc[k : k + 1]
+            routes.append(targets)
+            goals[i] = targets[0]
             # The robot's field already holds every shortest distance: read the path off it.
             paths.append(descend_path(fields[i], passable, tuple(goals[i])))
-        return Decision(state, frontiers, clusters, assignment, goals, paths, None)
+        return Decision(state, frontiers, clusters, assignment, goals, routes, paths, None)
 
 
-def _nearest(gp: GlobalPlanningConfig, pp: PreprocessConfig) -> ExplorationPipeline:
+def _nearest(gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig) -> ExplorationPipeline:
     return ExplorationPipeline("nearest", NearestPlanner(), pp)
 
 
-def _utility(gp: GlobalPlanningConfig, pp: PreprocessConfig) -> ExplorationPipeline:
+def _utility(gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig) -> ExplorationPipeline:
     return ExplorationPipeline("utility", UtilityPlanner(gp), pp)
 
 
-STRATEGIES: dict[str, Callable[[GlobalPlanningConfig, PreprocessConfig], ExplorationPipeline]] = {
+def _hier(gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig) -> ExplorationPipeline:
+    # The paper's three layers; the global affinity is the utility cost until the learned one lands.
+    return ExplorationPipeline("hier", UtilityPlanner(gp), pp, LocalRouter(lp, pp))
+
+
+STRATEGIES: dict[str, Callable[[GlobalPlanningConfig, PreprocessConfig, LocalPlanningConfig], ExplorationPipeline]] = {
+    "hier": _hier,
     "nearest": _nearest,
     "utility": _utility,
 }
@@ -124,9 +146,23 @@ def strategy_names() -> list[str]:
 
 
 def make_strategy(
-    name: str, global_cfg: GlobalPlanningConfig | None = None, preprocess_cfg: PreprocessConfig | None = None
+    name: str,
+    global_cfg: GlobalPlanningConfig | None = None,
+    preprocess_cfg: PreprocessConfig | None = None,
+    local_cfg: LocalPlanningConfig | None = None,
+    local: bool = True,
 ) -> ExplorationPipeline:
-    """The pipeline called ``name``; unknown names raise a one-line error listing the choices."""
+    """The pipeline called ``name``; unknown names raise a one-line error listing the choices.
+
+    ``local=False`` removes the local layer (robots go to cluster centres), for ablations; the name then
+    gets a ``-nolocal`` suffix.
+    """
     if name not in STRATEGIES:
         raise MrExploreError(f"unknown strategy {name!r}; choose one of {', '.join(STRATEGIES)}")
-    return STRATEGIES[name](global_cfg or GlobalPlanningConfig(), preprocess_cfg or PreprocessConfig())
+    pipeline = STRATEGIES[name](
+        global_cfg or GlobalPlanningConfig(), preprocess_cfg or PreprocessConfig(), local_cfg or LocalPlanningConfig()
+    )
+    if not local and pipeline.local is not None:
+        pipeline.local = None
+        pipeline.name += "-nolocal"
+    return pipeline

@@ -63,7 +63,9 @@ def adaptive_bandwidth(points: NDArray[np.floating], percentile: float, max_samp
     return float(np.percentile(pdist(points), percentile))
 
 
-def cluster_frontiers(frontier_rc: NDArray[np.integer], cfg: PreprocessConfig) -> Clusters:
+def cluster_frontiers(
+    frontier_rc: NDArray[np.integer], cfg: PreprocessConfig, bandwidth_cells: float | None = None
+) -> Clusters:
     """Cluster frontier cells with Mean-Shift and snap each mode to its nearest member.
 
     Clusters with fewer than ``cfg.min_cluster_size`` members are dropped (paper: 2).
@@ -72,6 +74,8 @@ def cluster_frontiers(frontier_rc: NDArray[np.integer], cfg: PreprocessConfig) -
     ----------
     frontier_rc:
         ``(n, 2) int`` frontier cells (F_un).
+    bandwidth_cells:
+        Fixed Mean-Shift bandwidth; None: the percentile rule of ``cfg``.
 
     Examples
     --------
@@ -87,7 +91,9 @@ def cluster_frontiers(frontier_rc: NDArray[np.integer], cfg: PreprocessConfig) -
             return Clusters(one, np.ones(1, np.int32), one, np.zeros(1, np.int32))
         return Clusters.empty()
     pts = np.asarray(frontier_rc, dtype=np.float64)
-    bandwidth = max(adaptive_bandwidth(pts, cfg.bandwidth_percentile, cfg.bandwidth_sample), 1.0)
+    if bandwidth_cells is None:
+        bandwidth_cells = adaptive_bandwidth(pts, cfg.bandwidth_percentile, cfg.bandwidth_sample)
+    bandwidth = max(bandwidth_cells, 1.0)
     modes, labels = mean_shift(pts, bandwidth)
     sizes = np.bincount(labels, minlength=len(modes))
     keep = np.flatnonzero(sizes >= cfg.min_cluster_size)

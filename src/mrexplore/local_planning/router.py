@@ -1,0 +1,113 @@
+"""Local routing of one robot inside its assigned cluster: sub-clusters, distances, best visiting order."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mrexplore.config import LocalPlanningConfig, PreprocessConfig
+from mrexplore.local_planning.routing import RouteProblem, reversal_search
+from mrexplore.paths.distance_field import distance_fields
+from mrexplore.preprocessing.clustering import cluster_frontiers
+from mrexplore.types import BoolGrid, GridRC
+
+__all__ = ["Route", "LocalRouter"]
+
+
+@dataclass(frozen=True)
+class Route:
+    """Where a robot goes inside its cluster, in order.
+
+    Attributes
+    ----------
+    targets_rc:
+        ``(m, 2) int32`` local candidates f_kj (snapped sub-cluster centres) in visiting order.
+    gains:
+        ``(m,) int32`` members of each sub-cluster (G_kj), same order.
+    utility:
+        U of the route (eq. 10 as read in :mod:`mrexplore.local_planning.routing`).
+    """
+
+    targets_rc: NDArray[np.int32]
+    gains: NDArray[np.int32]
+    utility: float
+
+
+@dataclass
+class LocalRouter:
+    """Paper IV-C: sub-cluster a large assigned cluster and order the sub-clusters by utility."""
+
+    cfg: LocalPlanningConfig = field(default_factory=LocalPlanningConfig)
+    preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
+
+    def applies(self, members: int) -> bool:
+        """Routing is used for clusters with more than theta members; smaller ones: go to the centre."""
+        return members > self.cfg.theta_members
+
+    def route(
+        self,
+        passable: BoolGrid,
+        robot_rc: GridRC,
+        robot_field: NDArray[np.float32],
+        members_rc: NDArray[np.int32],
+        resolution_m: float,
+    ) -> Route | None:
+        """Best route through the sub-clusters of ``members_rc``; None when no candidate is reachable.
+
+        Parameters
+        ----------
+        passable:
+            ``(H, W) bool`` cells a robot may drive on.
+        robot_field:
+            ``(H, W) float32`` the robot's distance field on ``passable`` (cells).
+        members_rc:
+            ``(n, 2) int32`` members of the assigned cluster.
+        """
+        cfg = self.cfg
+        bw = None if cfg.sub_bandwidth_m is None else cfg.sub_bandwidth_m / resolution_m
+        sub = cluster_frontiers(
+            members_rc,
+            PreprocessConfig(
+                min_cluster_size=1,
+                bandwidth_percentile=self.preprocess.bandwidth_percentile,
+                bandwidth_sample=self.preprocess.bandwidth_sample,
+            ),
+            bw,
+        )
+        cand = sub.centers_rc
+        gains = sub.sizes
+        from_robot = robot_field[cand[:, 0], cand[:, 1]].astype(np.float64)
+        keep = np.flatnonzero(np.isfinite(from_robot))
+        if len(keep) == 0:
+            return None
+        # The largest sub-clusters, at most max_candidates of them.
+        keep = keep[np.argsort(-gains[keep], kind="stable")[: cfg.max_candidates]]
+        cand, gains, from_robot = cand[keep], gains[keep], from_robot[keep]
+        between = self._between(passable, robot_rc, members_rc, cand, from_robot, resolution_m)
+        problem = RouteProblem(gains.astype(np.float64), from_robot, between, cfg)
+        order, utility = reversal_search(problem)
+        return Route(cand[order].astype(np.int32), gains[order].astype(np.int32), utility)
+
+    def _between(
+        self,
+        passable: BoolGrid,
+        robot_rc: GridRC,
+        members_rc: NDArray[np.int32],
+        cand: NDArray[np.int32],
+        from_robot: NDArray[np.float64],
+        resolution_m: float,
+    ) -> NDArray[np.float64]:
+        """Geodesic distances between candidates: one field per candidate on the box around robot and
+        cluster grown by ``margin_m`` (paths leaving the box are not seen: the via-robot bound is used)."""
+        margin = int(np.ceil(self.cfg.margin_m / resolution_m))
+        pts = np.vstack([members_rc, np.asarray(robot_rc, dtype=np.int32)[None]])
+        r0, c0 = np.maximum(pts.min(axis=0) - margin, 0)
+        r1, c1 = np.minimum(pts.max(axis=0) + margin + 1, passable.shape)
+        fields = distance_fields(passable[r0:r1, c0:c1], cand - np.array([r0, c0], dtype=np.int32))
+        local = cand - np.array([r0, c0])
+        between = np.array([f[local[:, 0], local[:, 1]] for f in fields], dtype=np.float64)
+        via_robot = from_robot[:, None] + from_robot[None, :]
+        between = np.where(np.isfinite(between), between, via_robot)
+        return np.minimum(between, between.T)
