@@ -53,6 +53,12 @@ def test_human_summary_and_pictures(tmp_path, capsys) -> None:
     assert Image.open(png).size[0] >= 400
 
 
+def test_no_local_switch(capsys) -> None:
+    assert main(["explore", *FAST, "--json", "--no-local"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    assert rec["strategy"] == "hier-nolocal" and rec["config"]["local"] is None
+
+
 def test_given_starts(capsys) -> None:
     assert main(["explore", *FAST, "--json", "--start", "3.0,3.0"]) == 0
     rec = json.loads(capsys.readouterr().out)

@@ -20,7 +20,7 @@ def small_map():
     return load_map("generated:3", MapConfig(resolution_m=0.1))
 
 
-@pytest.mark.parametrize("strategy", ["nearest", "utility"])
+@pytest.mark.parametrize("strategy", ["nearest", "utility", "hier"])
 def test_mission_explores_the_map(small_map, strategy: str) -> None:
     m = run_mission(small_map, make_strategy(strategy), SimConfig(robots=2), seed=1).measures
     assert m.coverage >= 0.99
@@ -40,6 +40,19 @@ def test_budget_ends_as_max_steps_never_success(small_map) -> None:
     res = run_mission(small_map, make_strategy("nearest"), mission_cfg=MissionConfig(max_steps=5), seed=0)
     assert res.measures.done_reason == "max_steps" and res.measures.steps == 5
     assert len(res.coverage_curve) == 6
+
+
+def test_hier_routes_through_sub_clusters(small_map) -> None:
+    seen: list[int] = []
+
+    def observe(sim, decision, goals) -> None:
+        if decision is not None:
+            seen.append(max(len(r) for r in decision.routes))
+
+    run_mission(small_map, make_strategy("hier"), SimConfig(robots=2), seed=1, observer=observe)
+    assert max(seen) > 1  # some decision routed a robot through several targets
+    assert make_strategy("hier", local=False).local is None
+    assert make_strategy("hier", local=False).name == "hier-nolocal"
 
 
 def test_wrong_number_of_starts_refused(small_map) -> None:
