@@ -10,6 +10,7 @@ from conftest import require_shared_maps
 from PIL import Image
 
 from mrexplore.config import MapConfig
+from mrexplore.maps.ground_truth import free_components
 from mrexplore.maps.loaders import load_map
 from mrexplore.maps.resample import resample_obstacles
 from mrexplore.types import MrExploreError
@@ -68,8 +69,21 @@ def test_outside_free_space_touching_border_becomes_obstacle(tmp_path) -> None:
     img[2:10, 2:10] = 0
     img[3:9, 3:9] = 255  # the building's inside
     Image.fromarray(img).save(tmp_path / "plan.png")
-    m = load_map(tmp_path / "plan.png", MapConfig(resolution_m=0.01, pixel_size_m=0.01))
+    cfg = MapConfig(resolution_m=0.01, pixel_size_m=0.01, outside_opening_m=0.015)
+    m = load_map(tmp_path / "plan.png", cfg)
     assert int((~m.occupied).sum()) == 36
+
+
+def test_door_in_outer_wall_does_not_make_the_inside_outside(tmp_path) -> None:
+    img = np.full((40, 40), 255, np.uint8)  # free outside
+    img[8:32, 8:32] = 0
+    img[10:30, 10:30] = 255  # a 20 x 20 room ...
+    img[18:21, 8:10] = 255  # ... with a 3-pixel door through its 2-pixel wall
+    Image.fromarray(img).save(tmp_path / "plan.png")
+    cfg = MapConfig(resolution_m=0.01, pixel_size_m=0.01, outside_opening_m=0.03)
+    free = ~load_map(tmp_path / "plan.png", cfg).occupied
+    assert free[10:30, 10:30].all() and free[18:21, 9].all()  # room and door kept (up to the wall line)
+    assert not free[:8].any() and not free[:, :7].any()  # the open land around is outside
 
 
 def test_houseexpo_json_polygon_rasterised(tmp_path) -> None:
@@ -134,6 +148,13 @@ def test_missing_file_and_no_free_space(tmp_path) -> None:
 )
 def test_every_shared_format_loads(rel: str) -> None:
     m = load_map(require_shared_maps() / rel, MapConfig(resolution_m=0.1))
+    labels, n = free_components(m.occupied)
+    largest_m2 = np.bincount(labels.ravel())[1:].max() * 0.01
+    assert largest_m2 > 20  # a building's inside survives (doors and leaking rays do not make it outside)
+
+
+def test_kth_outside_removed_inside_kept() -> None:
+    m = load_map(require_shared_maps() / "kth_floorplans/50052748.yaml", MapConfig(resolution_m=0.1))
     free = ~m.occupied
-    assert free.any()
-    assert not (free[0].any() or free[-1].any() or free[:, 0].any() or free[:, -1].any())
+    assert not free[0, 0] and not free[-1, 0]  # the open land around the building
+    assert 2000 < free.sum() * 0.01 < 3000  # the floor itself: 2,538 m2 in its largest component

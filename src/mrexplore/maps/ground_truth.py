@@ -45,26 +45,35 @@ class GroundTruthMap:
         return self.frame.resolution_m
 
 
-def mark_outside_as_obstacle(occupied: BoolGrid) -> BoolGrid:
-    """Turn every free component that touches the grid border into obstacle.
+def mark_outside_as_obstacle(occupied: BoolGrid, opening_cells: float) -> BoolGrid:
+    """Turn the outside of a building into obstacle: open free space that reaches the grid border.
 
-    Floor plans (KTH) draw the outside of the building as free space; it is not part of the building
-    and must neither be explored nor seen through, so it becomes obstacle.
+    Floor plans (KTH) draw the outside as free space; it is not part of the building and must neither be
+    explored nor seen through. Free space merely *touching* the border is not enough to call it outside:
+    a door in the outer wall, or a SLAM map's laser rays leaking through a window, connect the inside to
+    the border too. So the outside is found as an opening: free cells farther than ``opening_cells`` from
+    any obstacle form a core; the core's components that reach the border, grown back by
+    ``opening_cells`` within free space, are the outside. Passages narrower than twice the radius
+    (doors, gaps, rays) stop it.
 
     Examples
     --------
-    >>> occ = np.array([[0, 0, 0, 0, 0],
-    ...                 [0, 1, 1, 1, 0],
-    ...                 [0, 1, 0, 1, 0],
-    ...                 [0, 1, 1, 1, 0],
-    ...                 [0, 0, 0, 0, 0]], bool)
-    >>> int((~mark_outside_as_obstacle(occ)).sum())  # only the enclosed centre stays free
-    1
+    >>> occ = np.zeros((9, 9), bool); occ[2:7, 2:7] = True; occ[3:6, 3:6] = False  # a room in open land
+    >>> occ[4, 2] = False  # with a door to the outside
+    >>> int((~mark_outside_as_obstacle(occ, 1.5)).sum())  # the room and its door stay free
+    10
     """
-    labels, _ = free_components(occupied)
+    free = ~occupied
+    # Distances to the nearest obstacle only: the grid's edge is no wall, the outside goes on beyond it.
+    core = ndimage.distance_transform_edt(free) > opening_cells
+    labels, _ = ndimage.label(core, structure=_FOUR)
     border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
     border = border[border > 0]
-    return occupied | np.isin(labels, border)
+    if len(border) == 0:
+        return occupied.copy()
+    outside_core = np.isin(labels, border)
+    outside = (ndimage.distance_transform_edt(~outside_core) <= opening_cells) & free
+    return occupied | outside
 
 
 def free_components(occupied: BoolGrid) -> tuple[np.ndarray, int]:

@@ -82,8 +82,10 @@ def load_map(spec: str | Path, cfg: MapConfig | None = None) -> GroundTruthMap:
     )
 
 
-def _finish(obstacle: np.ndarray, frame: GridFrame, name: str, start_rc: tuple[int, int] | None) -> GroundTruthMap:
-    occupied = mark_outside_as_obstacle(obstacle)
+def _finish(
+    obstacle: np.ndarray, frame: GridFrame, name: str, start_rc: tuple[int, int] | None, cfg: MapConfig
+) -> GroundTruthMap:
+    occupied = mark_outside_as_obstacle(obstacle, cfg.outside_opening_m / frame.resolution_m)
     if not (~occupied).any():
         raise MrExploreError(f"map {name} has no free space inside its border; check the file's free/occupied values")
     if start_rc is not None and occupied[start_rc]:
@@ -99,7 +101,7 @@ def _load_generated(text: str, cfg: MapConfig) -> GroundTruthMap:
         raise MrExploreError(f"bad generator spec {text!r}; write generated:SEED with an integer SEED") from None
     obstacle = generate_floorplan(FloorplanSpec(seed=seed), cfg.resolution_m)
     frame = GridFrame(obstacle.shape[0], obstacle.shape[1], cfg.resolution_m)
-    return _finish(obstacle, frame, f"generated:{seed}", None)
+    return _finish(obstacle, frame, f"generated:{seed}", None, cfg)
 
 
 def _read_yaml(path: Path) -> dict[str, Any]:
@@ -153,7 +155,7 @@ def _load_ros_yaml(path: Path, cfg: MapConfig) -> GroundTruthMap:
     obstacle = ~(p < free_th)
     obstacle = resample_obstacles(obstacle, resolution, cfg.resolution_m)
     frame = GridFrame(obstacle.shape[0], obstacle.shape[1], cfg.resolution_m, (origin[0], origin[1]))
-    return _finish(obstacle, frame, path.stem, None)
+    return _finish(obstacle, frame, path.stem, None, cfg)
 
 
 def _is_dungeon(rgb: np.ndarray) -> bool:
@@ -181,7 +183,7 @@ def _load_image(path: Path, cfg: MapConfig) -> GroundTruthMap:
     frame = GridFrame(obstacle.shape[0], obstacle.shape[1], cfg.resolution_m)
     if start_rc is not None:
         start_rc = (min(start_rc[0], frame.height - 1), min(start_rc[1], frame.width - 1))
-    return _finish(obstacle, frame, path.stem, start_rc)
+    return _finish(obstacle, frame, path.stem, start_rc, cfg)
 
 
 def _load_houseexpo_json(path: Path, cfg: MapConfig) -> GroundTruthMap:
@@ -205,4 +207,4 @@ def _load_houseexpo_json(path: Path, cfg: MapConfig) -> GroundTruthMap:
     obstacle = np.asarray(canvas) < _GRAY_FREE_MIN
     obstacle = resample_obstacles(obstacle, HOUSEEXPO_RASTER_M, cfg.resolution_m)
     frame = GridFrame(obstacle.shape[0], obstacle.shape[1], cfg.resolution_m, (float(lo[0]), float(lo[1])))
-    return _finish(obstacle, frame, path.stem, None)
+    return _finish(obstacle, frame, path.stem, None, cfg)
