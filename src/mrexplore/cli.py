@@ -6,10 +6,12 @@ import argparse
 import json
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
 
+from mrexplore.bench.runner import EpisodeSpec, expand_maps, run_bench, write_report
 from mrexplore.config import MapConfig, MissionConfig, SimConfig, config_to_dict
 from mrexplore.maps.loaders import DEFAULT_MAP, load_map
 from mrexplore.mission import run_mission
@@ -84,7 +86,53 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="show a progress bar (default: only on a terminal)",
     )
+    be = sub.add_parser("bench", help="run many episodes in parallel, append results.csv, write report.md")
+    be.add_argument("--maps", required=True, nargs="+", help="map files and/or folders (searched recursively)")
+    be.add_argument("--strategies", default="hier,nearest,utility", help="comma-separated strategy names")
+    be.add_argument("--robots", default="3", help="comma-separated team sizes (default 3)")
+    be.add_argument("--seeds", type=int, default=3, help="seeds 0..N-1 per map (default 3)")
+    be.add_argument("--out", required=True, help="folder for results.csv and report.md")
+    be.add_argument("--workers", type=int, default=0, help="worker processes (default: one per core)")
+    be.add_argument("--resolution", type=float, default=MapConfig.resolution_m, help="cell size, metres")
+    be.add_argument("--max-steps", type=int, default=MissionConfig.max_steps, help="step budget per episode")
+    be.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="show a progress bar (default: only on a terminal)",
+    )
     return parser
+
+
+def _ints(text: str, name: str) -> list[int]:
+    try:
+        return [int(v) for v in text.split(",") if v]
+    except ValueError:
+        raise MrExploreError(f"{name} must be comma-separated integers, got {text!r}") from None
+
+
+def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
+    strategies = [s for s in args.strategies.split(",") if s]
+    robots = _ints(args.robots, "--robots")
+    if args.seeds < 1:
+        raise MrExploreError(f"--seeds must be >= 1, got {args.seeds}")
+    for n in robots:
+        SimConfig(robots=n)
+    MapConfig(resolution_m=args.resolution)
+    MissionConfig(max_steps=args.max_steps)
+    maps = expand_maps(args.maps)
+    specs = [
+        EpisodeSpec(m, s, n, seed, args.resolution, args.max_steps)
+        for m in maps
+        for s in strategies
+        for n in robots
+        for seed in range(args.seeds)
+    ]
+    out = Path(args.out)
+    ran = run_bench(specs, out / "results.csv", args.workers, args.progress)
+    command = "mrexplore " + " ".join(argv)
+    write_report(out / "results.csv", out / "report.md", strategies, command)
+    return f"{ran} episodes run, {len(specs) - ran} already done; wrote {out / 'results.csv'} and {out / 'report.md'}"
 
 
 def _explore(args: argparse.Namespace) -> dict[str, Any]:
@@ -155,11 +203,14 @@ def _summary(rec: dict[str, Any]) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``mrexplore`` command; returns the exit code."""
+    argv = list(sys.argv[1:] if argv is None else argv)
     args = build_parser().parse_args(argv)
     try:
         if args.command == "explore":
             rec = _explore(args)
             print(json.dumps(rec) if args.json else _summary(rec))
+        elif args.command == "bench":
+            print(_bench(args, argv))
     except MrExploreError as exc:
         print(f"mrexplore: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -21,6 +21,8 @@ from mrexplore.types import BoolGrid, CellState, MrExploreError, StateGrid
 __all__ = ["Decision", "ExplorationPipeline", "STRATEGIES", "make_strategy", "strategy_names", "NO_GOAL"]
 
 NO_GOAL = np.array([-1, -1], dtype=np.int32)
+NO_LOCAL_SUFFIX = "-nolocal"
+"""A strategy name with this suffix (``hier-nolocal``) runs without its local layer."""
 
 
 @dataclass(frozen=True)
@@ -154,9 +156,11 @@ def make_strategy(
 ) -> ExplorationPipeline:
     """The pipeline called ``name``; unknown names raise a one-line error listing the choices.
 
-    ``local=False`` removes the local layer (robots go to cluster centres), for ablations; the name then
-    gets a ``-nolocal`` suffix.
+    ``local=False`` (or a ``-nolocal`` suffix on the name) removes the local layer: robots go to cluster
+    centres, for ablations; the pipeline's name then carries the suffix.
     """
+    if name.endswith(NO_LOCAL_SUFFIX) and name.removesuffix(NO_LOCAL_SUFFIX) in STRATEGIES:
+        name, local = name.removesuffix(NO_LOCAL_SUFFIX), False
     if name not in STRATEGIES:
         raise MrExploreError(f"unknown strategy {name!r}; choose one of {', '.join(STRATEGIES)}")
     pipeline = STRATEGIES[name](
@@ -164,5 +168,5 @@ def make_strategy(
     )
     if not local and pipeline.local is not None:
         pipeline.local = None
-        pipeline.name += "-nolocal"
+        pipeline.name += NO_LOCAL_SUFFIX
     return pipeline

@@ -1,0 +1,1 @@
+"""Benchmarks: scenario suites, the episode runner, reports."""

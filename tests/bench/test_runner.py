@@ -1,0 +1,121 @@
+"""The benchmark runner: CSV schema, resume after a kill, map folders, the report."""
+
+from __future__ import annotations
+
+import csv
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from mrexplore.bench.runner import COLUMNS, EpisodeSpec, expand_maps, read_rows, run_bench, size_class
+from mrexplore.cli import main
+from mrexplore.types import MrExploreError
+
+FAST = dict(resolution_m=0.2, max_steps=3000)
+
+
+def test_size_classes() -> None:
+    assert [size_class(a) for a in (99.9, 100.0, 300.0, 300.1)] == ["small", "middle", "middle", "large"]
+
+
+def test_rows_follow_the_schema_and_finished_episodes_are_skipped(tmp_path) -> None:
+    specs = [EpisodeSpec("generated:1", s, 2, seed, **FAST) for s in ("nearest", "hier") for seed in (0, 1)]
+    out = tmp_path / "results.csv"
+    assert run_bench(specs[:2], out, workers=1) == 2
+    assert run_bench(specs, out, workers=2) == 2  # only the two new ones
+    with open(out, newline="") as f:
+        reader = csv.DictReader(f)
+        assert reader.fieldnames == COLUMNS
+        rows = list(reader)
+    assert sorted((r["strategy"], r["seed"]) for r in rows) == [
+        ("hier", "0"),
+        ("hier", "1"),
+        ("nearest", "0"),
+        ("nearest", "1"),
+    ]
+    assert all(float(r["coverage"]) >= 0.99 for r in rows)
+    assert run_bench(specs, out) == 0
+
+
+def test_resume_after_kill_loses_nothing(tmp_path) -> None:
+    out = tmp_path / "b"
+    cmd = [
+        sys.executable,
+        "-m",
+        "mrexplore",
+        "bench",
+        "--maps",
+        "generated:1",
+        "generated:2",
+        "generated:3",
+        "--strategies",
+        "nearest",
+        "--seeds",
+        "2",
+        "--resolution",
+        "0.2",
+        "--workers",
+        "1",
+        "--out",
+        str(out),
+    ]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    while time.time() < deadline and len(read_rows(out / "results.csv")) < 2:
+        time.sleep(0.2)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    before = read_rows(out / "results.csv")
+    assert 2 <= len(before) < 6
+    done = subprocess.run(cmd, capture_output=True, text=True, check=True)
+    assert done.stdout.startswith(f"{6 - len(before)} episodes run, {len(before)} already done")
+    after = read_rows(out / "results.csv")
+    assert len(after) == 6 and after[: len(before)] == before
+    assert len({(r["map"], r["seed"]) for r in after}) == 6
+
+
+def test_expand_maps_skips_label_images_and_yaml_images(tmp_path) -> None:
+    img = np.zeros((10, 10), np.uint8)
+    for name in ("a.png", "a_spaces.png", "b.png", "c.json"):
+        Image.fromarray(img).save(tmp_path / name) if name.endswith(".png") else (tmp_path / name).write_text("{}")
+    (tmp_path / "b.yaml").write_text("image: b.png\nresolution: 0.1\n")
+    got = [Path(p).name for p in expand_maps([str(tmp_path)])]
+    assert got == ["a.png", "b.yaml", "c.json"]
+    with pytest.raises(MrExploreError, match="map not found: nope; pass map files or folders with --maps"):
+        expand_maps(["nope"])
+
+
+def test_bench_cli_writes_report(tmp_path, capsys) -> None:
+    args = [
+        "bench",
+        "--maps",
+        "generated:2",
+        "--strategies",
+        "hier,hier-nolocal",
+        "--seeds",
+        "1",
+        "--resolution",
+        "0.2",
+        "--workers",
+        "1",
+        "--out",
+        str(tmp_path),
+    ]
+    assert main(args) == 0
+    report = (tmp_path / "report.md").read_text()
+    assert "Made by: `mrexplore bench --maps generated:2" in report
+    assert "| hier | " in report and "| hier-nolocal | " in report
+
+
+def test_bench_refuses_unknown_strategy(tmp_path, capsys) -> None:
+    assert main(["bench", "--maps", "generated:2", "--strategies", "coscan2", "--out", str(tmp_path)]) == 2
+    assert (
+        capsys.readouterr().err
+        == "mrexplore: error: unknown strategy 'coscan2'; choose one of hier, nearest, utility\n"
+    )
