@@ -42,10 +42,14 @@ class MapConfig:
     """Metres per pixel of an image with no YAML, > 0; None: 0.01 for grayscale, 0.1 for DungeonMaps."""
     outside_opening_m: float = 1.5
     """Free space reaching the border through passages wider than twice this is outside, metres, > 0."""
+    min_passage_m: float = 0.1
+    """Free passages narrower than this are closed: no robot fits (HouseExpo renders leave 1-6 cm slivers
+    where walls meet), metres, >= 0 (0: keep every gap)."""
 
     def __post_init__(self) -> None:
         _require(self.resolution_m > 0, "resolution", "> 0 metres", self.resolution_m)
         _require(self.outside_opening_m > 0, "outside_opening_m", "> 0 metres", self.outside_opening_m)
+        _require(self.min_passage_m >= 0, "min_passage_m", ">= 0 metres", self.min_passage_m)
         if self.pixel_size_m is not None:
             _require(self.pixel_size_m > 0, "pixel-size", "> 0 metres", self.pixel_size_m)
 

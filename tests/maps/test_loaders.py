@@ -41,7 +41,7 @@ def test_upsampling_repeats_pixels() -> None:
 def test_grayscale_png_at_pixel_size(tmp_path) -> None:
     p = tmp_path / "room.png"
     Image.fromarray(_room_pixels()).save(p)
-    m = load_map(p, MapConfig(resolution_m=0.02, pixel_size_m=0.01))
+    m = load_map(p, MapConfig(resolution_m=0.02, pixel_size_m=0.01, min_passage_m=0))
     assert m.shape == (10, 10)
     assert m.occupied[:, 5].sum() == 8  # wall column survives except the 2-cell door
     assert not m.occupied[5, 3]
@@ -56,12 +56,13 @@ def test_ros_yaml_trinary_unknown_is_obstacle_and_origin_kept(tmp_path) -> None:
         "image: m.pgm\nresolution: 0.1\norigin: [-1.0, 2.0, 0.0]\nnegate: 0\n"
         "occupied_thresh: 0.65\nfree_thresh: 0.196\n"
     )
-    m = load_map(tmp_path / "m.yaml", MapConfig(resolution_m=0.1))
+    cfg = MapConfig(resolution_m=0.1, min_passage_m=0)
+    m = load_map(tmp_path / "m.yaml", cfg)
     assert m.occupied[2, 3] and not m.occupied[2, 2]
     assert m.frame.origin_xy == (-1.0, 2.0)
     assert m.frame.rc_to_xy((5, 0)) == (-0.95, 2.05)
     # Loading the image directly finds its YAML beside it.
-    assert np.array_equal(load_map(tmp_path / "m.pgm", MapConfig(resolution_m=0.1)).occupied, m.occupied)
+    assert np.array_equal(load_map(tmp_path / "m.pgm", cfg).occupied, m.occupied)
 
 
 def test_outside_free_space_touching_border_becomes_obstacle(tmp_path) -> None:
@@ -69,7 +70,7 @@ def test_outside_free_space_touching_border_becomes_obstacle(tmp_path) -> None:
     img[2:10, 2:10] = 0
     img[3:9, 3:9] = 255  # the building's inside
     Image.fromarray(img).save(tmp_path / "plan.png")
-    cfg = MapConfig(resolution_m=0.01, pixel_size_m=0.01, outside_opening_m=0.015)
+    cfg = MapConfig(resolution_m=0.01, pixel_size_m=0.01, outside_opening_m=0.015, min_passage_m=0)
     m = load_map(tmp_path / "plan.png", cfg)
     assert int((~m.occupied).sum()) == 36
 
@@ -80,10 +81,26 @@ def test_door_in_outer_wall_does_not_make_the_inside_outside(tmp_path) -> None:
     img[10:30, 10:30] = 255  # a 20 x 20 room ...
     img[18:21, 8:10] = 255  # ... with a 3-pixel door through its 2-pixel wall
     Image.fromarray(img).save(tmp_path / "plan.png")
-    cfg = MapConfig(resolution_m=0.01, pixel_size_m=0.01, outside_opening_m=0.03)
+    cfg = MapConfig(resolution_m=0.01, pixel_size_m=0.01, outside_opening_m=0.03, min_passage_m=0)
     free = ~load_map(tmp_path / "plan.png", cfg).occupied
     assert free[10:30, 10:30].all() and free[18:21, 9].all()  # room and door kept (up to the wall line)
     assert not free[:8].any() and not free[:, :7].any()  # the open land around is outside
+
+
+def test_slivers_narrower_than_a_robot_are_closed(tmp_path) -> None:
+    # Two rooms whose walls meet with a 6 px (6 cm) sliver, as in HouseExpo 4e7034e3..., and a real
+    # 60 px door elsewhere: at 0.05 m the sliver would be a one-cell gap; it must not connect the rooms.
+    img = np.full((200, 400), 255, np.uint8)
+    img[:10], img[-10:], img[:, :10], img[:, -10:] = 0, 0, 0, 0
+    img[:, 195:205] = 0  # wall between the rooms
+    img[100:106, 195:205] = 255  # the sliver
+    img[20:80, 195:205] = 255  # the door
+    Image.fromarray(img).save(tmp_path / "two.png")
+    occ = load_map(tmp_path / "two.png", MapConfig(resolution_m=0.05)).occupied
+    assert occ[20, 39:41].all()  # sliver cells (rows 100-105 px -> cell 20) closed
+    assert not occ[8, 39:41].any()  # the door stays open
+    loose = load_map(tmp_path / "two.png", MapConfig(resolution_m=0.05, min_passage_m=0)).occupied
+    assert not loose[20, 39:41].all()
 
 
 def test_houseexpo_json_polygon_rasterised(tmp_path) -> None:

@@ -10,7 +10,7 @@ from scipy import ndimage
 from mrexplore.maps.frame import GridFrame
 from mrexplore.types import BoolGrid, GridRC, MrExploreError
 
-__all__ = ["GroundTruthMap", "mark_outside_as_obstacle", "free_components", "explorable_region"]
+__all__ = ["GroundTruthMap", "close_narrow_gaps", "mark_outside_as_obstacle", "free_components", "explorable_region"]
 
 _FOUR = ndimage.generate_binary_structure(2, 1)
 
@@ -43,6 +43,22 @@ class GroundTruthMap:
     @property
     def resolution_m(self) -> float:
         return self.frame.resolution_m
+
+
+def close_narrow_gaps(occupied: BoolGrid, radius_cells: int) -> BoolGrid:
+    """Fill free passages up to ``2 * radius_cells`` cells wide: closing of obstacles (dilate, then erode).
+
+    Examples
+    --------
+    >>> occ = np.zeros((5, 7), bool); occ[:, 3] = True; occ[2, 3] = False  # a one-cell gap in a wall
+    >>> bool(close_narrow_gaps(occ, 1)[2, 3]), int(close_narrow_gaps(occ, 1).sum())
+    (True, 5)
+    """
+    if radius_cells < 1:
+        return occupied.copy()
+    structure = np.ones((2 * radius_cells + 1,) * 2, dtype=bool)
+    grown = ndimage.binary_dilation(occupied, structure)
+    return ndimage.binary_erosion(grown, structure, border_value=1) | occupied
 
 
 def mark_outside_as_obstacle(occupied: BoolGrid, opening_cells: float) -> BoolGrid:

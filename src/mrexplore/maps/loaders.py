@@ -19,7 +19,7 @@ from PIL import Image, ImageDraw, UnidentifiedImageError
 from mrexplore.config import MapConfig
 from mrexplore.maps.floorplan import FloorplanSpec, generate_floorplan
 from mrexplore.maps.frame import GridFrame
-from mrexplore.maps.ground_truth import GroundTruthMap, mark_outside_as_obstacle
+from mrexplore.maps.ground_truth import GroundTruthMap, close_narrow_gaps, mark_outside_as_obstacle
 from mrexplore.maps.resample import resample_obstacles
 from mrexplore.types import MrExploreError
 
@@ -85,7 +85,10 @@ def load_map(spec: str | Path, cfg: MapConfig | None = None) -> GroundTruthMap:
 def _finish(
     obstacle: np.ndarray, frame: GridFrame, name: str, start_rc: tuple[int, int] | None, cfg: MapConfig
 ) -> GroundTruthMap:
-    occupied = mark_outside_as_obstacle(obstacle, cfg.outside_opening_m / frame.resolution_m)
+    # A gap of width w is filled by a closing of radius ceil(w / 2) cells.
+    radius = math.ceil(cfg.min_passage_m / frame.resolution_m / 2 - 1e-9)
+    occupied = close_narrow_gaps(obstacle, radius)
+    occupied = mark_outside_as_obstacle(occupied, cfg.outside_opening_m / frame.resolution_m)
     if not (~occupied).any():
         raise MrExploreError(f"map {name} has no free space inside its border; check the file's free/occupied values")
     if start_rc is not None and occupied[start_rc]:
