@@ -161,10 +161,17 @@ class GlobalPlanningConfig:
     """explore_lite's potential_scale: cost per metre of geodesic distance, >= 0."""
     size_weight: float = 1.0
     """explore_lite's gain_scale: reward per metre of frontier (members x resolution), >= 0."""
+    commitment: float | None = None
+    """Goal hysteresis at re-decisions: the cluster holding a robot's current goal is offered to it at this
+    fraction of the distance to that goal, and a robot that keeps the cluster keeps its goal and route,
+    in [0, 1]; 1: none (every decision starts afresh); None: the strategy's default (0.5 for strategies
+    that go to cluster centres, 1 for hier, whose routes already commit)."""
 
     def __post_init__(self) -> None:
         _require(self.distance_weight >= 0, "distance_weight", ">= 0", self.distance_weight)
         _require(self.size_weight >= 0, "size_weight", ">= 0", self.size_weight)
+        if self.commitment is not None:
+            _require(0 <= self.commitment <= 1, "commitment", "in [0, 1] or None", self.commitment)
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -71,6 +71,30 @@ class ExplorationPipeline:
     planner: GlobalPlanner
     preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
     local: LocalRouter | None = None
+    commitment: float = 1.0
+
+    def _committed(
+        self,
+        clusters: Clusters,
+        fields: list[NDArray[np.float32]],
+        current: Sequence[NDArray[np.int32]],
+        dist: NDArray[np.float64],
+    ) -> dict[int, tuple[int, NDArray[np.int32]]]:
+        """Robots whose goal is still a member of a cluster: ``{robot: (cluster, route)}``; discounts
+        ``dist`` in place for those pairs (goal hysteresis)."""
+        where = {(int(r), int(c)): int(k) for (r, c), k in zip(clusters.members_rc, clusters.labels, strict=True)}
+        kept: dict[int, tuple[int, NDArray[np.int32]]] = {}
+        for i, route in enumerate(current):
+            if len(route) == 0:
+                continue
+            k = where.get((int(route[0, 0]), int(route[0, 1])))
+            if k is None:
+                continue
+            d_goal = float(fields[i][route[0, 0], route[0, 1]])
+            if np.isfinite(d_goal):
+                dist[i, k] = min(dist[i, k], self.commitment * d_goal)
+                kept[i] = (k, route)
+        return kept
 
     def centre_state(self, beliefs: list[Belief], sensor: SensorConfig) -> StateGrid:
         """The centre's grid: the robots' beliefs fused, then denoised by closing (paper IV-A)."""
@@ -78,12 +102,21 @@ class ExplorationPipeline:
         return close_unknown_holes(state, self.preprocess.closing_size_cells)
 
     def decide(
-        self, state: StateGrid, robots_rc: NDArray[np.int32], resolution_m: float, blacklist: BoolGrid | None = None
+        self,
+        state: StateGrid,
+        robots_rc: NDArray[np.int32],
+        resolution_m: float,
+        blacklist: BoolGrid | None = None,
+        current: Sequence[NDArray[np.int32]] | None = None,
     ) -> Decision:
-        """Run layers 1 and 2 on the centre's grid and give every robot a goal and a path.
+        """Run layers 1-3 on the centre's grid and give every robot a goal, a route and a path.
 
         ``blacklist`` marks frontier cells a robot stood on without resolving them; they are not
-        candidates any more (explore_lite blacklists such goals too).
+        candidates any more (explore_lite blacklists such goals too). ``current`` holds each robot's
+        current route (its goal first; empty for none): a goal still on a frontier makes its cluster
+        cheaper for that robot by ``commitment``, and a robot assigned that cluster again keeps its
+        route. Without it, Mean-Shift's snapped centres of large clusters jump between far pieces from
+        one decision to the next and robots turn back and forth.
         """
         frontiers = detect_frontiers(state)
         un_rc = frontiers.un_rc
@@ -96,6 +129,8 @@ class ExplorationPipeline:
         fields = distance_fields(passable, robots_rc) if len(clusters) else []
         for i, field_i in enumerate(fields):
             dist[i] = distances_at(field_i, clusters.centers_rc)
+        hysteresis = current is not None and self.commitment < 1
+        kept = self._committed(clusters, fields, current, dist) if hysteresis and current is not None else {}
         empty = Assignment(np.full(n, UNASSIGNED, dtype=np.int64))
         no_paths = [np.zeros((0, 2), np.int32) for _ in range(n)]
         goals = np.tile(NO_GOAL, (n, 1))
@@ -111,10 +146,13 @@ class ExplorationPipeline:
                 paths.append(no_paths[i])
                 routes.append(no_paths[i])
                 continue
-            route = None
-            if self.local is not None and self.local.applies(int(clusters.sizes[k])):
+            if kept.get(i, (None,))[0] == k:
+                targets = kept[i][1]
+            elif self.local is not None and self.local.applies(int(clusters.sizes[k])):
                 route = self.local.route(passable, tuple(robots_rc[i]), fields[i], clusters.members_of(k), resolution_m)
-            targets = route.targets_rc if route is not None else clusters.centers_rc[k : k + 1]
+                targets = route.targets_rc if route is not None else clusters.centers_rc[k : k + 1]
+            else:
+                targets = clusters.centers_rc[k : k + 1]
             routes.append(targets)
             goals[i] = targets[0]
             # The robot's field already holds every shortest distance: read the path off it.
@@ -122,17 +160,28 @@ class ExplorationPipeline:
         return Decision(state, frontiers, clusters, assignment, goals, routes, paths, None)
 
 
+CENTRE_COMMITMENT = 0.5
+"""Default hysteresis of strategies whose goal is a cluster centre (measured on 6 maps x 2 seeds: utility
+561 mean steps without, 414 with 0.5)."""
+
+
+def _commitment(gp: GlobalPlanningConfig, default: float) -> float:
+    return default if gp.commitment is None else gp.commitment
+
+
 def _nearest(gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig) -> ExplorationPipeline:
-    return ExplorationPipeline("nearest", NearestPlanner(), pp)
+    return ExplorationPipeline("nearest", NearestPlanner(), pp, commitment=_commitment(gp, CENTRE_COMMITMENT))
 
 
 def _utility(gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig) -> ExplorationPipeline:
-    return ExplorationPipeline("utility", UtilityPlanner(gp), pp)
+    return ExplorationPipeline("utility", UtilityPlanner(gp), pp, commitment=_commitment(gp, CENTRE_COMMITMENT))
 
 
 def _hier(gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig) -> ExplorationPipeline:
-    # The paper's three layers; the global affinity is the utility cost until the learned one lands.
-    return ExplorationPipeline("hier", UtilityPlanner(gp), pp, LocalRouter(lp, pp))
+    # The paper's three layers; the global affinity is the utility cost until the learned one lands. No
+    # hysteresis by default: a route already commits the robot to a sequence of targets (measured on 6
+    # maps x 2 seeds: 442 mean steps without, 480 with commitment 0.5).
+    return ExplorationPipeline("hier", UtilityPlanner(gp), pp, LocalRouter(lp, pp), _commitment(gp, 1.0))
 
 
 STRATEGIES: dict[str, Callable[[GlobalPlanningConfig, PreprocessConfig, LocalPlanningConfig], ExplorationPipeline]] = {
