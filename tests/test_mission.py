@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from conftest import state_grid
 
-from mrexplore.config import MapConfig, MissionConfig, SimConfig
+from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import run_mission
 from mrexplore.strategies import make_strategy
@@ -76,6 +76,28 @@ def test_one_decision_by_hand() -> None:
     assert d.goals_rc.tolist() == [[2, 1], [2, 7]]  # each robot takes the end nearer to it
     assert d.paths[0].tolist() == [[2, 2], [2, 1]]
     assert d.paths[1].tolist() == [[2, 6], [2, 7]]
+
+
+@pytest.mark.parametrize(("commitment", "goal"), [(1.0, [2, 7]), (0.4, [2, 1])])
+def test_commitment_keeps_a_robot_on_its_goal(commitment: float, goal: list[int]) -> None:
+    # The robot at (2, 5) heads for the left end (4 cells away); the right end is 2 cells away.
+    # Afresh, nearest turns it around; with commitment 0.4 its goal costs 1.6 < 2 and it stays.
+    state = state_grid("""
+        #########
+        ?.......?
+        ?.......?
+        ?.......?
+        #########
+    """)
+    pipeline = make_strategy("nearest", GlobalPlanningConfig(commitment=commitment))
+    current = [np.array([[2, 1]], np.int32)]
+    d = pipeline.decide(state, np.array([[2, 5]], np.int32), 0.05, current=current)
+    assert d.goals_rc.tolist() == [goal]
+
+
+def test_commitment_defaults() -> None:
+    assert make_strategy("utility").commitment == 0.5 and make_strategy("nearest").commitment == 0.5
+    assert make_strategy("hier").commitment == 1.0
 
 
 def test_no_frontier_ends_the_mission_by_decision() -> None:

@@ -64,4 +64,3 @@ class GlobalPlanner(Protocol):
 
     def assign(self, problem: AssignmentProblem) -> Assignment:
         """Choose a cluster for every robot that can reach one."""
-        ...

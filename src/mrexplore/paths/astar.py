@@ -8,12 +8,10 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
+from mrexplore.paths.moves import DC, DR, move_cost
 from mrexplore.types import BoolGrid, GridRC
 
 __all__ = ["astar_path", "path_length_cells"]
-
-_DR = np.array([-1, 1, 0, 0, -1, -1, 1, 1], dtype=np.int64)
-_DC = np.array([0, 0, -1, 1, -1, 1, -1, 1], dtype=np.int64)
 
 
 @nb.njit(cache=True, inline="always")
@@ -76,7 +74,6 @@ def _astar(passable: np.ndarray, sr: int, sc: int, gr: int, gc: int) -> np.ndarr
     goal = gr * W + gc
     g[s] = 0.0
     size = _heap_push(keys, vals, 0, _octile(sr, sc, gr, gc), s)
-    sqrt2 = math.sqrt(2.0)
     found = False
     while size > 0:
         u = vals[0]
@@ -90,16 +87,11 @@ def _astar(passable: np.ndarray, sr: int, sc: int, gr: int, gc: int) -> np.ndarr
         r = u // W
         c = u - r * W
         for d in range(8):
-            rr = r + _DR[d]
-            cc = c + _DC[d]
-            if rr < 0 or rr >= H or cc < 0 or cc >= W or not passable[rr, cc]:
+            step = move_cost(passable, r, c, d)
+            if step < 0:
                 continue
-            if d >= 4:
-                if not passable[r, cc] or not passable[rr, c]:
-                    continue
-                step = sqrt2
-            else:
-                step = 1.0
+            rr = r + DR[d]
+            cc = c + DC[d]
             v = rr * W + cc
             nd = g[u] + step
             if nd < g[v] - 1e-12:

@@ -18,13 +18,12 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
+from mrexplore.paths.moves import DC, DR, move_cost
 from mrexplore.types import BoolGrid, GridRC
 
 __all__ = ["distance_field", "distance_fields", "distances_at", "descend_path", "SQRT2"]
 
 SQRT2 = math.sqrt(2.0)
-_DR = np.array([-1, 1, 0, 0, -1, -1, 1, 1], dtype=np.int64)
-_DC = np.array([0, 0, -1, 1, -1, 1, -1, 1], dtype=np.int64)
 _POOL = ThreadPoolExecutor(max_workers=os.cpu_count() or 1, thread_name_prefix="mrexplore-field")
 
 
@@ -158,22 +157,16 @@ def _descend(field: np.ndarray, passable: np.ndarray, gr: int, gc: int) -> np.nd
     out[0, 1] = gc
     r = gr
     c = gc
-    sqrt2 = math.sqrt(2.0)
     while field[r, c] > 0.0 and n < cap:
         best = field[r, c]
         br = -1
         bc = -1
         for d in range(8):
-            rr = r + _DR[d]
-            cc = c + _DC[d]
-            if rr < 0 or rr >= H or cc < 0 or cc >= W or not passable[rr, cc]:
+            step = move_cost(passable, r, c, d)
+            if step < 0:
                 continue
-            if d >= 4:
-                if not passable[r, cc] or not passable[rr, c]:
-                    continue
-                step = sqrt2
-            else:
-                step = 1.0
+            rr = r + DR[d]
+            cc = c + DC[d]
             # Follow a neighbour whose distance plus the move explains ours: it lies on a shortest path.
             if field[rr, cc] + step <= field[r, c] + 1e-4 and field[rr, cc] < best:
                 best = field[rr, cc]
