@@ -136,7 +136,13 @@ def run_mission(
         if need:
             t = time.perf_counter()
             state = strategy.centre_state(sim.beliefs, sim_cfg.sensor)
-            current = [np.vstack([goals[i : i + 1], routes[i]]) if goals[i, 0] >= 0 else no_route for i in range(n)]
+            # Only goals still ahead and still bordering unknown space may hold their robot (hysteresis).
+            current = [
+                np.vstack([goals[i : i + 1], routes[i]])
+                if goals[i, 0] >= 0 and not sim.at_path_end(i) and _goal_still_frontier(sim.team_observed, goals[i])
+                else no_route
+                for i in range(n)
+            ]
             decision = strategy.decide(state, sim.positions_rc.copy(), truth.resolution_m, blacklist, current)
             plan_ms.append((time.perf_counter() - t) * 1e3)
             last_decision_step = sim.steps
