@@ -79,6 +79,7 @@ def test_given_starts(capsys) -> None:
             "mrexplore: error: start (0.01, 0.01) lies inside a wall; give --start X,Y on free space",
         ),
         (["--resolution", "0"], "mrexplore: error: resolution must be > 0 metres, got 0.0"),
+        (["--commitment", "2"], "mrexplore: error: commitment must be in [0, 1] or None, got 2.0"),
     ],
 )
 def test_bad_input_one_line_exit_2(capsys, args: list[str], message: str) -> None:

@@ -12,7 +12,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from mrexplore.bench.runner import EpisodeSpec, expand_maps, run_bench, write_report
-from mrexplore.config import MapConfig, MissionConfig, SimConfig, config_to_dict
+from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig, config_to_dict
 from mrexplore.maps.loaders import DEFAULT_MAP, load_map
 from mrexplore.mission import run_mission
 from mrexplore.render import GifRecorder, save_png
@@ -24,6 +24,7 @@ __all__ = ["main", "build_parser"]
 
 EXIT_BAD_INPUT = 2
 DEFAULT_STRATEGY = "hier"
+COMMITMENT_HELP = "goal hysteresis in [0, 1] (1: none; default: 0.5 for nearest/utility, 1 for hier)"
 
 
 class _Parser(argparse.ArgumentParser):
@@ -59,6 +60,7 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument(
         "--no-local", action="store_true", help="turn the local routing layer off: robots go to cluster centres"
     )
+    ex.add_argument("--commitment", type=float, default=None, help=COMMITMENT_HELP)
     ex.add_argument("--seed", type=int, default=0, help="seed of starts and sensor noise (default 0)")
     ex.add_argument("--max-steps", type=int, default=MissionConfig.max_steps, help="step budget (default 20000)")
     ex.add_argument(
@@ -93,6 +95,7 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("--seeds", type=int, default=3, help="seeds 0..N-1 per map (default 3)")
     be.add_argument("--out", required=True, help="folder for results.csv and report.md")
     be.add_argument("--workers", type=int, default=0, help="worker processes (default: one per core)")
+    be.add_argument("--commitment", type=float, default=None, help=COMMITMENT_HELP)
     be.add_argument("--resolution", type=float, default=MapConfig.resolution_m, help="cell size, metres")
     be.add_argument("--max-steps", type=int, default=MissionConfig.max_steps, help="step budget per episode")
     be.add_argument(
@@ -120,9 +123,10 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
         SimConfig(robots=n)
     MapConfig(resolution_m=args.resolution)
     MissionConfig(max_steps=args.max_steps)
+    GlobalPlanningConfig(commitment=args.commitment)
     maps = expand_maps(args.maps)
     specs = [
-        EpisodeSpec(m, s, n, seed, args.resolution, args.max_steps)
+        EpisodeSpec(m, s, n, seed, args.resolution, args.max_steps, args.commitment)
         for m in maps
         for s in strategies
         for n in robots
@@ -139,7 +143,7 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
     map_cfg = MapConfig(resolution_m=args.resolution, pixel_size_m=args.pixel_size)
     sim_cfg = SimConfig(robots=args.robots)
     mission_cfg = MissionConfig(max_steps=args.max_steps)
-    strategy = make_strategy(args.strategy, local=not args.no_local)
+    strategy = make_strategy(args.strategy, GlobalPlanningConfig(commitment=args.commitment), local=not args.no_local)
     truth = load_map(args.map, map_cfg)
     starts = None
     if args.start:
@@ -178,6 +182,7 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
             "sim": config_to_dict(sim_cfg),
             "mission": config_to_dict(mission_cfg),
             "preprocess": config_to_dict(strategy.preprocess),
+            "commitment": strategy.commitment,
             "local": config_to_dict(strategy.local.cfg) if strategy.local is not None else None,
         },
     }

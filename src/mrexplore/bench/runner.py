@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from mrexplore.config import MapConfig, MissionConfig, SimConfig
+from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import run_mission
 from mrexplore.strategies import make_strategy
@@ -47,6 +47,7 @@ class EpisodeSpec:
     seed: int
     resolution_m: float = 0.05
     max_steps: int = 20000
+    commitment: float | None = None
 
     @property
     def key(self) -> tuple[str, str, int, int]:
@@ -65,7 +66,7 @@ def run_episode(spec: EpisodeSpec) -> dict[str, Any]:
     truth = load_map(spec.map_path, MapConfig(resolution_m=spec.resolution_m))
     result = run_mission(
         truth,
-        make_strategy(spec.strategy),
+        make_strategy(spec.strategy, GlobalPlanningConfig(commitment=spec.commitment)),
         SimConfig(robots=spec.robots),
         MissionConfig(max_steps=spec.max_steps),
         seed=spec.seed,
