@@ -72,6 +72,7 @@ class ExplorationPipeline:
     preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
     local: LocalRouter | None = None
     commitment: float = 1.0
+    """Goal hysteresis in [0, 1] (see :class:`~mrexplore.config.GlobalPlanningConfig`); 1: none."""
 
     def _committed(
         self,
@@ -129,8 +130,7 @@ class ExplorationPipeline:
         fields = distance_fields(passable, robots_rc) if len(clusters) else []
         for i, field_i in enumerate(fields):
             dist[i] = distances_at(field_i, clusters.centers_rc)
-        hysteresis = current is not None and self.commitment < 1
-        kept = self._committed(clusters, fields, current, dist) if hysteresis and current is not None else {}
+        kept = self._committed(clusters, fields, current, dist) if current is not None and self.commitment < 1 else {}
         empty = Assignment(np.full(n, UNASSIGNED, dtype=np.int64))
         no_paths = [np.zeros((0, 2), np.int32) for _ in range(n)]
         goals = np.tile(NO_GOAL, (n, 1))

@@ -29,7 +29,8 @@ class AssignmentProblem:
         Candidate targets (frontier clusters with snapped centres and sizes).
     dist_cells:
         ``(n_robots, n_clusters) float64`` geodesic distance robot -> cluster centre, cells; ``inf`` where
-        unreachable.
+        unreachable. With goal hysteresis, the cluster holding a robot's current goal shows the discounted
+        distance to that goal instead.
     resolution_m:
         Metres per cell.
     state:
