@@ -7,7 +7,6 @@ with the parameter name, the value received and the allowed range, e.g.
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -227,8 +226,4 @@ class MissionConfig:
 
 def config_to_dict(cfg: Any) -> dict[str, Any]:
     """Plain ``dict`` of a config dataclass (nested), for result files and checkpoints."""
-    out = asdict(cfg)
-    for k, v in out.items():
-        if isinstance(v, float) and math.isinf(v):
-            out[k] = str(v)
-    return out
+    return asdict(cfg)

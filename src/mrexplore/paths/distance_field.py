@@ -21,9 +21,8 @@ from numpy.typing import NDArray
 from mrexplore.paths.moves import DC, DR, move_cost
 from mrexplore.types import BoolGrid, GridRC
 
-__all__ = ["distance_field", "distance_fields", "distances_at", "descend_path", "SQRT2"]
+__all__ = ["distance_field", "distance_fields", "distances_at", "descend_path"]
 
-SQRT2 = math.sqrt(2.0)
 _POOL = ThreadPoolExecutor(max_workers=os.cpu_count() or 1, thread_name_prefix="mrexplore-field")
 
 
