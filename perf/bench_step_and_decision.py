@@ -2,8 +2,9 @@
 
 Run: python perf/bench_step_and_decision.py [--steps 400] [--robots 3 8]
 Targets on the 2-core dev machine: sim <= 2 ms per step at 3 robots; a decision <= 50 ms median.
-A decision is the centre's whole work: fuse beliefs, closing, frontiers, Mean-Shift, one distance field
-per robot, assignment and paths. One is taken every 10 steps here, close to the rate missions show.
+A decision is one communication round and the centre's whole work: every robot closes its grid and
+encodes its sparse frontier map, the centre decodes and rebuilds the team grid, then frontiers, Mean-Shift,
+one distance field per robot, assignment and paths. One is taken every 10 steps here, close to the rate missions show.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import numpy as np
 
 from mrexplore.config import SimConfig
 from mrexplore.maps.loaders import load_map
+from mrexplore.preprocessing.transmission import TeamLink
 from mrexplore.sim.starts import draw_starts
 from mrexplore.sim.world import ExplorationSim
 from mrexplore.strategies import make_strategy
@@ -38,11 +40,12 @@ def bench(map_path: Path, robots: int, steps: int, strategy: str) -> dict[str, f
     cfg = SimConfig(robots=robots)
     sim = ExplorationSim(truth, draw_starts(truth, robots, cfg.start_spread_m, rng), cfg, rng)
     pipeline = make_strategy(strategy)
+    link = TeamLink(robots, truth.shape, pipeline.preprocess, cfg.sensor)
     step_ms, plan_ms = [], []
     for k in range(steps):
         if k % 10 == 0:
             t = time.perf_counter()
-            state = pipeline.centre_state(sim.beliefs, cfg.sensor)
+            state = link.exchange(sim.beliefs, sim.positions_rc)
             d = pipeline.decide(state, sim.positions_rc.copy(), truth.resolution_m)
             plan_ms.append((time.perf_counter() - t) * 1e3)
             if d.done_reason is not None:

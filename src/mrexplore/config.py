@@ -218,10 +218,14 @@ class MissionConfig:
     """Step budget, >= 1; reaching it ends the mission as ``max_steps`` (truncated, never success)."""
     replan_every_steps: int = 25
     """A decision is taken at least this often, steps, >= 1."""
+    transmission: str = "delta"
+    """What the centre rebuilds its grid from: ``delta`` (changes since the last acknowledged sparse
+    frontier map) or ``full`` (the whole sparse map every round, the paper's). Same grid, fewer bytes."""
 
     def __post_init__(self) -> None:
         _require(self.max_steps >= 1, "max-steps", ">= 1", self.max_steps)
         _require(self.replan_every_steps >= 1, "replan_every_steps", ">= 1", self.replan_every_steps)
+        _require(self.transmission in ("delta", "full"), "transmission", "'delta' or 'full'", self.transmission)
 
 
 def config_to_dict(cfg: Any) -> dict[str, Any]:

@@ -22,6 +22,7 @@ from tqdm import tqdm
 from mrexplore.config import MissionConfig, SimConfig
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.paths.astar import astar_path
+from mrexplore.preprocessing.transmission import TeamLink
 from mrexplore.sim.measures import EpisodeMeasures
 from mrexplore.sim.starts import draw_starts
 from mrexplore.sim.world import ExplorationSim
@@ -93,7 +94,9 @@ def run_mission(
     plan_ms: list[float] = []
     last_decision_step = -mission_cfg.replan_every_steps
     decision: Decision | None = None
-    state = strategy.centre_state(sim.beliefs, sim_cfg.sensor)
+    # Every strategy plans on the grid the centre rebuilds from the robots' sparse frontier maps (IV-A).
+    link = TeamLink(n, truth.shape, strategy.preprocess, sim_cfg.sensor, mission_cfg.transmission)  # type: ignore[arg-type]
+    state = np.full(truth.shape, CellState.UNKNOWN, dtype=np.uint8)  # until the first round
     done_reason = "max_steps"
     show = sys.stderr.isatty() if progress is None else progress
     bar = tqdm(total=100, unit="%", desc=f"{strategy.name} {truth.name}", disable=not show, leave=False)
@@ -135,7 +138,7 @@ def run_mission(
                 need = True
         if need:
             t = time.perf_counter()
-            state = strategy.centre_state(sim.beliefs, sim_cfg.sensor)
+            state = link.exchange(sim.beliefs, sim.positions_rc)
             # Only goals still ahead and still bordering unknown space may hold their robot (hysteresis).
             current = [
                 np.vstack([goals[i : i + 1], routes[i]])
@@ -166,6 +169,12 @@ def run_mission(
             observer(sim, decision, goals)
     bar.close()
     measures = EpisodeMeasures.from_run(
-        np.asarray(curve), sim.robot_coverage, sim.path_len_m, plan_ms, time.perf_counter() - t0, done_reason
+        np.asarray(curve),
+        sim.robot_coverage,
+        sim.path_len_m,
+        plan_ms,
+        time.perf_counter() - t0,
+        done_reason,
+        link.totals.as_measures(),
     )
     return MissionResult(measures, np.asarray(curve), np.asarray(starts_rc, dtype=np.int32), state, sim)

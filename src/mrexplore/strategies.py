@@ -8,14 +8,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.config import GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig, SensorConfig
+from mrexplore.config import GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig
 from mrexplore.global_planning.classical import NearestPlanner, UtilityPlanner
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem, GlobalPlanner
 from mrexplore.local_planning.router import LocalRouter
 from mrexplore.paths.distance_field import descend_path, distance_fields, distances_at
 from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers
-from mrexplore.preprocessing.frontiers import Frontiers, close_unknown_holes, detect_frontiers
-from mrexplore.sim.belief import Belief, merge_beliefs
+from mrexplore.preprocessing.frontiers import Frontiers, detect_frontiers
 from mrexplore.types import BoolGrid, CellState, MrExploreError, StateGrid
 
 __all__ = ["Decision", "ExplorationPipeline", "STRATEGIES", "make_strategy", "strategy_names", "NO_GOAL"]
@@ -96,11 +95,6 @@ class ExplorationPipeline:
                 dist[i, k] = min(dist[i, k], self.commitment * d_goal)
                 kept[i] = (k, route)
         return kept
-
-    def centre_state(self, beliefs: list[Belief], sensor: SensorConfig) -> StateGrid:
-        """The centre's grid: the robots' beliefs fused, then denoised by closing (paper IV-A)."""
-        state = merge_beliefs(beliefs).state(sensor)
-        return close_unknown_holes(state, self.preprocess.closing_size_cells)
 
     def decide(
         self,

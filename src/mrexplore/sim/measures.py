@@ -51,6 +51,19 @@ class EpisodeMeasures:
     wall_s: float
     done_reason: str
     """``no_frontiers`` / ``no_reachable_frontiers`` (explored), or ``max_steps`` (budget ran out)."""
+    rounds: int = 0
+    """Communication rounds: every robot sent its map to the centre once per round (one per decision)."""
+    bytes_grid: int = 0
+    """Bytes the paper's baseline sends: each robot's int8 occupancy grid over its known bounding box."""
+    bytes_grid_zlib: int = 0
+    """The same grids zlib-compressed (level 6)."""
+    bytes_sparse: int = 0
+    """Bytes of the sparse frontier maps (paper IV-A), whole every round."""
+    bytes_sparse_delta: int = 0
+    """Bytes of the incremental sparse maps (changes since the last acknowledged round)."""
+    reconstruction_iou_min: float = 1.0
+    """Smallest free-space IoU, over rounds, of the centre's rebuilt grid against the robots' own beliefs."""
+    reconstruction_iou_mean: float = 1.0
 
     @classmethod
     def from_run(
@@ -61,7 +74,10 @@ class EpisodeMeasures:
         plan_ms: list[float],
         wall_s: float,
         done_reason: str,
+        transmission: dict[str, Any] | None = None,
     ) -> EpisodeMeasures:
+        """Measures of a finished run; ``transmission`` holds the byte and IoU fields (see
+        :meth:`~mrexplore.preprocessing.transmission.TransmissionTotals.as_measures`)."""
         team = float(curve[-1])
         s90, s95, s99 = (steps_to_coverage(curve, lv) for lv in COVERAGE_MILESTONES)
         ms = np.asarray(plan_ms, dtype=np.float64)
@@ -79,6 +95,7 @@ class EpisodeMeasures:
             plan_ms_p95=round(float(np.percentile(ms, 95)), 3) if len(ms) else 0.0,
             wall_s=round(wall_s, 3),
             done_reason=done_reason,
+            **(transmission or {}),
         )
 
     def to_dict(self) -> dict[str, Any]:

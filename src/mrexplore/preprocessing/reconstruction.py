@@ -1,0 +1,218 @@
+"""The computing centre: rebuild each robot's grid from its sparse frontier map and merge them (paper IV-A).
+
+Free space is filled scan line by scan line from the message's seeds. A step out of a cell is allowed
+towards every neighbour its code does not flag (an interior cell has code 0: all four neighbours free), so
+the fill never leaves the robot's free space and reaches all of it. Non-free neighbours take the state
+the code gives them; every other cell is unknown. The robots' grids are merged (free where some robot
+saw free space and none an obstacle), denoised by closing, and frontiers are detected again on the
+merged grid, so a frontier of one robot inside space another has seen is no frontier.
+
+:func:`fill_paper` is the paper's own fill for comparison: one seed at the robot's position, F_un ∪ F_occ
+as the fence, no neighbour codes.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+from numpy.typing import NDArray
+
+from mrexplore.preprocessing.frontiers import close_unknown_holes
+from mrexplore.preprocessing.sparse_map import DIRECTIONS, SparseFrontierMap, apply_delta
+from mrexplore.types import BoolGrid, CellState, GridRC, MrExploreError, StateGrid
+
+__all__ = ["fill_free", "fill_paper", "reconstruct", "merge_reconstructions", "CentreMap", "free_iou"]
+
+_UP, _DOWN, _LEFT, _RIGHT = 0, 1, 2, 3
+_NOT_HEARD = -1
+"""Round held for a robot the centre has not heard from."""
+
+
+@nb.njit(cache=True, inline="always")
+def _blocked(code: int, d: int) -> bool:  # pragma: no cover - numba
+    return ((code >> d) | (code >> (4 + d))) & 1 == 1
+
+
+@nb.njit(cache=True, inline="always")
+def _push(stack: np.ndarray, sp: int, r: int, c: int) -> tuple[np.ndarray, int]:  # pragma: no cover - numba
+    if sp == len(stack):
+        grown = np.empty((2 * len(stack), 2), dtype=np.int64)
+        grown[:sp] = stack
+        stack = grown
+    stack[sp, 0] = r
+    stack[sp, 1] = c
+    return stack, sp + 1
+
+
+@nb.njit(cache=True)
+def _scanline_fill(
+    codes: np.ndarray, seeds: np.ndarray, fence: np.ndarray, filled: np.ndarray
+) -> None:  # pragma: no cover - numba
+    """Scan-line flood fill into ``filled``. With ``fence`` empty, moves follow the codes; otherwise a move
+    may leave only a cell outside the fence (the paper's rule), and codes are not read."""
+    H, W = filled.shape
+    use_fence = fence.size > 0
+    stack = np.empty((max(64, len(seeds)), 2), dtype=np.int64)
+    sp = 0
+    for s in seeds:
+        stack, sp = _push(stack, sp, s // W, s % W)
+    while sp > 0:
+        sp -= 1
+        r = stack[sp, 0]
+        c = stack[sp, 1]
+        if filled[r, c]:
+            continue
+        lo = c
+        while lo > 0 and not filled[r, lo - 1]:
+            if (fence[r, lo] or fence[r, lo - 1]) if use_fence else _blocked(codes[r, lo], _LEFT):
+                break
+            lo -= 1
+        hi = c
+        while hi < W - 1 and not filled[r, hi + 1]:
+            if (fence[r, hi] or fence[r, hi + 1]) if use_fence else _blocked(codes[r, hi], _RIGHT):
+                break
+            hi += 1
+        for x in range(lo, hi + 1):
+            filled[r, x] = True
+        for dr, bit in ((-1, _UP), (1, _DOWN)):
+            rr = r + dr
+            if rr < 0 or rr >= H:
+                continue
+            in_run = False
+            for x in range(lo, hi + 1):
+                if use_fence:
+                    ok = not fence[r, x] and not filled[rr, x]
+                else:
+                    ok = not _blocked(codes[r, x], bit) and not filled[rr, x]
+                if ok and not in_run:
+                    stack, sp = _push(stack, sp, rr, x)
+                in_run = ok
+
+
+def fill_free(codes: NDArray[np.uint8], seeds: NDArray[np.int64]) -> BoolGrid:
+    """``(H, W) bool`` free space rebuilt from a code grid and its seeds (with every coded cell free).
+
+    Examples
+    --------
+    Two rooms joined by a one-cell door; the door and every wall-side cell are boundary cells, and the
+    fill crosses the door because the codes say where the walls are:
+
+    >>> from mrexplore.preprocessing.sparse_map import neighbour_codes
+    >>> F, O = CellState.FREE, CellState.OCCUPIED
+    >>> g = np.full((5, 9), O, np.uint8); g[1:4, 1:4] = F; g[1:4, 5:8] = F; g[2, 4] = F
+    >>> codes = neighbour_codes(g)
+    >>> bool((fill_free(codes, np.array([2 * 9 + 2])) == (g == F)).all())
+    True
+    """
+    filled = np.zeros(codes.shape, dtype=bool)
+    _scanline_fill(codes, np.asarray(seeds, dtype=np.int64), np.zeros((0, 0), dtype=bool), filled)
+    return filled | (codes != 0)
+
+
+def fill_paper(boundary: BoolGrid, seed_rc: GridRC) -> BoolGrid:
+    """The paper's reconstruction: scan-line fill from one seed, fenced by F_un ∪ F_occ, plus the fence.
+
+    The paper seeds at the robot's cell; a robot standing on the fence (next to a wall, say) has no
+    interior cell to start from, and the centre cannot tell which neighbour is free. Callers measuring
+    the method pass the interior cell nearest the robot instead (an oracle start, generous to the paper).
+    A fill may only leave cells off the fence, so from an interior seed it stays in the free space.
+    """
+    filled = np.zeros(boundary.shape, dtype=bool)
+    r, c = seed_rc
+    if not boundary[r, c]:
+        seeds = np.array([r * boundary.shape[1] + c], np.int64)
+        _scanline_fill(np.zeros((1, 1), np.uint8), seeds, np.ascontiguousarray(boundary), filled)
+    return filled | boundary
+
+
+def reconstruct(codes: NDArray[np.uint8], seeds: NDArray[np.int64]) -> StateGrid:
+    """``(H, W) uint8`` one robot's grid: filled free space, the coded neighbours as unknown or occupied,
+    the rest unknown."""
+    H, W = codes.shape
+    state = np.full((H, W), CellState.UNKNOWN, dtype=np.uint8)
+    occupied = np.zeros((H + 2, W + 2), dtype=bool)
+    for d, (dr, dc) in enumerate(DIRECTIONS):
+        occupied[1 + dr : 1 + dr + H, 1 + dc : 1 + dc + W] |= ((codes >> (4 + d)) & 1).astype(bool)
+    state[occupied[1:-1, 1:-1]] = CellState.OCCUPIED
+    state[fill_free(codes, seeds)] = CellState.FREE
+    return state
+
+
+def merge_reconstructions(states: list[StateGrid], closing_size_cells: int) -> StateGrid:
+    """The centre's grid: free where some robot has free space and none an obstacle, occupied where some
+    robot has an obstacle, then closed (paper IV-A: noise removed by closing after reconstruction)."""
+    free = np.logical_or.reduce([s == CellState.FREE for s in states])
+    occupied = np.logical_or.reduce([s == CellState.OCCUPIED for s in states])
+    merged = np.full(states[0].shape, CellState.UNKNOWN, dtype=np.uint8)
+    merged[free] = CellState.FREE
+    merged[occupied] = CellState.OCCUPIED
+    return close_unknown_holes(merged, closing_size_cells)
+
+
+class CentreMap:
+    """The centre's memory of every robot's last map; takes full maps and deltas, gives the merged grid.
+
+    Examples
+    --------
+    >>> from mrexplore.preprocessing.sparse_map import sparse_frontier_map
+    >>> F, O, U = CellState.FREE, CellState.OCCUPIED, CellState.UNKNOWN
+    >>> a = np.full((4, 6), U, np.uint8); a[1:3, 0:3] = F   # robot 0 saw the left half
+    >>> b = np.full((4, 6), U, np.uint8); b[1:3, 2:6] = F   # robot 1 the right half
+    >>> centre = CentreMap(n_robots=2, shape=(4, 6), closing_size_cells=1)
+    >>> centre.receive(sparse_frontier_map(a, 0, 0, (1, 0)))
+    >>> centre.receive(sparse_frontier_map(b, 1, 0, (1, 5)))
+    >>> (centre.state() == F).sum()  # 2 x 6 free cells; (1, 2) is F_un for robot 0 but not for the team
+    np.int64(12)
+    """
+
+    def __init__(self, n_robots: int, shape: tuple[int, int], closing_size_cells: int) -> None:
+        self.shape = shape
+        self.closing_size_cells = closing_size_cells
+        self._codes = [np.zeros(shape, dtype=np.uint8) for _ in range(n_robots)]
+        self._seeds = [np.zeros(0, dtype=np.int64) for _ in range(n_robots)]
+        self._round = [_NOT_HEARD] * n_robots
+        self._known = [False] * n_robots
+
+    def receive(self, message: SparseFrontierMap) -> None:
+        """Take one robot's message: a full map replaces its map, a delta updates the acknowledged one."""
+        i = message.robot
+        if not 0 <= i < len(self._codes) or message.shape != self.shape:
+            raise MrExploreError(
+                f"message from robot {i} for a {message.shape} grid does not fit this centre "
+                f"({len(self._codes)} robots, grid {self.shape}); check the robot id and map"
+            )
+        if message.is_delta:
+            if self._round[i] != message.base_round:
+                raise MrExploreError(
+                    f"delta from robot {i} applies to round {message.base_round}, the centre holds round "
+                    f"{self._round[i]}; ask the robot for a full map"
+                )
+            apply_delta(self._codes[i], message)
+        else:
+            self._codes[i] = message.code_grid()
+        self._seeds[i] = message.seeds
+        self._round[i] = message.round
+        self._known[i] = True
+
+    def robot_state(self, robot: int) -> StateGrid:
+        """One robot's rebuilt grid (all unknown before its first message)."""
+        return reconstruct(self._codes[robot], self._seeds[robot])
+
+    def state(self) -> StateGrid:
+        """The merged, closed grid the planners run on."""
+        states = [self.robot_state(i) for i in range(len(self._codes)) if self._known[i]]
+        if not states:
+            return np.full(self.shape, CellState.UNKNOWN, dtype=np.uint8)
+        return merge_reconstructions(states, self.closing_size_cells)
+
+
+def free_iou(a: BoolGrid, b: BoolGrid) -> float:
+    """Intersection over union of two free-space masks (1.0 when both are empty).
+
+    Examples
+    --------
+    >>> free_iou(np.array([True, True, False]), np.array([True, False, False]))
+    0.5
+    """
+    union = int(np.count_nonzero(a | b))
+    return 1.0 if union == 0 else int(np.count_nonzero(a & b)) / union

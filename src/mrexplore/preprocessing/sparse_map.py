@@ -1,0 +1,171 @@
+"""The sparse frontier map a robot sends instead of its grid (paper IV-A): F_un and F_occ with neighbour codes.
+
+A robot's free space is its boundary (the free cells with a non-free 4-neighbour: exactly F_un ∪ F_occ)
+plus the interior those cells enclose. The message lists the boundary cells, each with a one-byte
+*neighbour code* saying which of its 4 neighbours are unknown (bits 0-3) and which occupied (bits 4-7), in
+the order up, down, left, right. The label the paper sends is in the code: F_un is a non-zero low nibble,
+F_occ a non-zero high nibble. With the code, the centre's fill may step out of a boundary cell towards
+every neighbour the code does not flag, so one seed per free component rebuilds the component exactly,
+thin corridors and rooms behind doors included (the paper seeds only at the robot's position and stops at
+boundary cells, which loses every room reached through a passage too thin to hold an interior cell).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import ndimage
+
+from mrexplore.types import BoolGrid, CellState, GridRC, StateGrid
+
+__all__ = [
+    "SparseFrontierMap",
+    "DIRECTIONS",
+    "neighbour_codes",
+    "component_seeds",
+    "sparse_frontier_map",
+    "changed_since",
+    "apply_delta",
+    "FULL",
+]
+
+DIRECTIONS = ((-1, 0), (1, 0), (0, -1), (0, 1))
+"""Neighbour order of a code's bits: up, down, left, right (bit d: unknown, bit 4 + d: occupied)."""
+FULL = -1
+"""``base_round`` of a full map (not a delta)."""
+
+
+@dataclass(frozen=True)
+class SparseFrontierMap:
+    """One robot's message for one communication round.
+
+    Attributes
+    ----------
+    robot, round:
+        Sender and its round number (>= 0).
+    shape:
+        ``(H, W)`` of the shared map grid the indices refer to.
+    position_rc:
+        The robot's cell (the paper's s_ri).
+    cells:
+        ``(n,) int64`` strictly increasing row-major indices. A full map lists every boundary cell; a delta
+        lists the cells whose code changed since ``base_round``.
+    codes:
+        ``(n,) uint8`` neighbour code of each listed cell; in a delta, 0 means "no longer boundary".
+    seeds:
+        ``(m,) int64`` strictly increasing row-major indices, one free cell per free component that has
+        interior cells (the robot's own cell seeds its component).
+    base_round:
+        :data:`FULL`, or the acknowledged round a delta applies to.
+    """
+
+    robot: int
+    round: int
+    shape: tuple[int, int]
+    position_rc: GridRC
+    cells: NDArray[np.int64] = field(repr=False)
+    codes: NDArray[np.uint8] = field(repr=False)
+    seeds: NDArray[np.int64] = field(repr=False)
+    base_round: int = FULL
+
+    @property
+    def is_delta(self) -> bool:
+        return self.base_round != FULL
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, SparseFrontierMap):
+            return NotImplemented
+        return (
+            (self.robot, self.round, self.shape, self.position_rc, self.base_round)
+            == (other.robot, other.round, other.shape, other.position_rc, other.base_round)
+            and np.array_equal(self.cells, other.cells)
+            and np.array_equal(self.codes, other.codes)
+            and np.array_equal(self.seeds, other.seeds)
+        )
+
+    def code_grid(self) -> NDArray[np.uint8]:
+        """``(H, W) uint8`` the codes painted on an empty grid (a full map's boundary)."""
+        grid = np.zeros(self.shape, dtype=np.uint8)
+        grid.ravel()[self.cells] = self.codes
+        return grid
+
+
+def neighbour_codes(state: StateGrid) -> NDArray[np.uint8]:
+    """Neighbour code of every free cell (0 for interior and non-free cells); cells beyond the grid count
+    as no state, like :func:`~mrexplore.preprocessing.frontiers.detect_frontiers`.
+
+    Examples
+    --------
+    >>> F, O, U = CellState.FREE, CellState.OCCUPIED, CellState.UNKNOWN
+    >>> g = np.array([[O, O, O],
+    ...               [F, F, U],
+    ...               [F, F, F]], np.uint8)
+    >>> neighbour_codes(g).tolist()  # (1,1): occupied up (bit 4), unknown right (bit 3)
+    [[0, 0, 0], [16, 24, 0], [0, 0, 1]]
+    """
+    H, W = state.shape
+    padded = np.full((H + 2, W + 2), CellState.FREE, dtype=np.uint8)
+    padded[1:-1, 1:-1] = state
+    codes = np.zeros((H, W), dtype=np.uint8)
+    for d, (dr, dc) in enumerate(DIRECTIONS):
+        nb = padded[1 + dr : 1 + dr + H, 1 + dc : 1 + dc + W]
+        codes |= (nb == CellState.UNKNOWN).astype(np.uint8) << d
+        codes |= (nb == CellState.OCCUPIED).astype(np.uint8) << (4 + d)
+    codes[state != CellState.FREE] = 0
+    return codes
+
+
+def component_seeds(free: BoolGrid, codes: NDArray[np.uint8], position_rc: GridRC) -> NDArray[np.int64]:
+    """One seed per 4-connected free component that has an interior cell (code 0): the robot's cell for
+    its own component, the first interior cell in row-major order for the others. Components made of
+    boundary cells only need none: every one of their cells is in the message."""
+    labels, n = ndimage.label(free)
+    if n == 0:
+        return np.zeros(0, dtype=np.int64)
+    interior = free & (codes == 0)
+    flat_labels = labels.ravel()
+    idx = np.flatnonzero(interior.ravel())
+    comp = flat_labels[idx]
+    _, first = np.unique(comp, return_index=True)
+    seeds = {int(comp[i]): int(idx[i]) for i in first}
+    r, c = position_rc
+    own = int(labels[r, c])
+    if own in seeds:
+        seeds[own] = r * free.shape[1] + c
+    return np.array(sorted(seeds.values()), dtype=np.int64)
+
+
+def sparse_frontier_map(state: StateGrid, robot: int, round_: int, position_rc: GridRC) -> SparseFrontierMap:
+    """Build a robot's full message from its (closed) grid.
+
+    Examples
+    --------
+    >>> F, O = CellState.FREE, CellState.OCCUPIED
+    >>> g = np.full((5, 5), O, np.uint8); g[1:4, 1:4] = F
+    >>> m = sparse_frontier_map(g, 0, 0, (2, 2))
+    >>> len(m.cells), m.seeds.tolist()  # 8 boundary cells around one interior cell, the robot's
+    (8, [12])
+    """
+    codes = neighbour_codes(state)
+    cells = np.flatnonzero(codes.ravel()).astype(np.int64)
+    seeds = component_seeds(state == CellState.FREE, codes, position_rc)
+    r, c = position_rc
+    return SparseFrontierMap(robot, round_, state.shape, (int(r), int(c)), cells, codes.ravel()[cells], seeds)
+
+
+def changed_since(previous: NDArray[np.uint8], current: SparseFrontierMap, base_round: int) -> SparseFrontierMap:
+    """The delta of a full map ``current`` against the code grid ``previous`` acknowledged at ``base_round``:
+    only the cells whose code changed (RACER-style incremental sharing); seeds are always sent whole."""
+    now = current.code_grid().ravel()
+    before = previous.ravel()
+    cells = np.flatnonzero(now != before).astype(np.int64)
+    return SparseFrontierMap(
+        current.robot, current.round, current.shape, current.position_rc, cells, now[cells], current.seeds, base_round
+    )
+
+
+def apply_delta(codes: NDArray[np.uint8], delta: SparseFrontierMap) -> None:
+    """Write a delta's codes into the receiver's code grid of that robot, in place."""
+    np.put(codes, delta.cells, delta.codes)
