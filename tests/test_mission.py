@@ -108,3 +108,21 @@ def test_no_frontier_ends_the_mission_by_decision() -> None:
     """)
     d = make_strategy("nearest").decide(state, np.array([[1, 1]], np.int32), 0.05)
     assert d.done_reason == "no_frontiers"
+
+
+def test_centre_plans_the_same_from_deltas_as_from_full_maps(small_map) -> None:
+    runs = [
+        run_mission(small_map, make_strategy("hier"), mission_cfg=MissionConfig(transmission=mode), seed=2)
+        for mode in ("delta", "full")
+    ]
+    strip = [{k: v for k, v in r.measures.to_dict().items() if k not in TIMING_KEYS} for r in runs]
+    assert strip[0] == strip[1]
+    m = runs[0].measures
+    assert m.rounds == m.decisions and m.coverage >= 0.99
+    assert m.bytes_sparse_delta < m.bytes_sparse < m.bytes_grid / 2
+    assert m.reconstruction_iou_min >= 0.98 and m.reconstruction_iou_min <= m.reconstruction_iou_mean <= 1.0
+
+
+def test_bad_transmission_mode_refused() -> None:
+    with pytest.raises(MrExploreError, match=r"^transmission must be 'delta' or 'full', got 'zip'$"):
+        MissionConfig(transmission="zip")

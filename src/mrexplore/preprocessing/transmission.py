@@ -27,7 +27,7 @@ from mrexplore.preprocessing.sparse_map import FULL, changed_since, sparse_front
 from mrexplore.sim.belief import Belief
 from mrexplore.types import CellState, StateGrid
 
-__all__ = ["TeamLink", "TransmissionTotals", "occupancy_grid_bytes", "TRANSMISSION_MODES"]
+__all__ = ["TeamLink", "RobotSender", "TransmissionTotals", "occupancy_grid_bytes", "TRANSMISSION_MODES"]
 
 TransmissionMode = Literal["delta", "full"]
 TRANSMISSION_MODES: tuple[TransmissionMode, ...] = ("delta", "full")
@@ -56,6 +56,40 @@ def occupancy_grid_bytes(state: StateGrid) -> tuple[int, int]:
         lut[s] = v
     data = lut[box].tobytes()
     return HEADER.size + len(data), HEADER.size + len(zlib.compress(data, 6))
+
+
+class RobotSender:
+    """One robot's side of the link: builds its message each round and remembers what the centre holds.
+
+    :meth:`send` gives the whole map (the paper's message) and the incremental one: the delta against the
+    last acknowledged map, or the whole map where that is shorter (the first round, or after most of the
+    boundary moved).
+    """
+
+    def __init__(self, robot: int, shape: tuple[int, int]) -> None:
+        self.robot = robot
+        self._acked = np.zeros(shape, dtype=np.uint8)
+        self._acked_round = FULL
+
+    def send(self, closed: StateGrid, round_: int, position_rc: tuple[int, int]) -> tuple[bytes, bytes]:
+        """``(full, incremental)`` message bytes of this round from the robot's closed grid."""
+        full = sparse_frontier_map(closed, self.robot, round_, position_rc)
+        full_bytes = encode(full)
+        incremental = full_bytes
+        if self._acked_round != FULL:
+            delta_bytes = encode(changed_since(self._acked, full, self._acked_round))
+            if len(delta_bytes) < len(full_bytes):
+                incremental = delta_bytes
+        return full_bytes, incremental
+
+    def acknowledged(self, message_bytes: bytes) -> None:
+        """The centre confirmed this round's message: later deltas apply to it."""
+        message = decode(message_bytes)
+        if message.is_delta:
+            np.put(self._acked, message.cells, message.codes)
+        else:
+            self._acked = message.code_grid()
+        self._acked_round = message.round
 
 
 @dataclass
@@ -106,8 +140,7 @@ class TeamLink:
         self.mode = mode
         self.centre = CentreMap(n_robots, shape, preprocess.closing_size_cells)
         self.totals = TransmissionTotals()
-        self._acked = [np.zeros(shape, dtype=np.uint8) for _ in range(n_robots)]
-        self._acked_round = [FULL] * n_robots
+        self.senders = [RobotSender(i, shape) for i in range(n_robots)]
 
     def exchange(self, beliefs: Sequence[Belief], positions_rc: NDArray[np.integer]) -> StateGrid:
         """Run one round: every robot sends, the centre rebuilds; returns the centre's ``(H, W) uint8`` grid."""
@@ -118,21 +151,16 @@ class TeamLink:
             team_free |= own == CellState.FREE
             closed = close_unknown_holes(own, self.preprocess.closing_size_cells)
             pos = (int(positions_rc[i][0]), int(positions_rc[i][1]))
-            full = sparse_frontier_map(closed, i, r, pos)
-            full_bytes = encode(full)
-            if self._acked_round[i] == FULL:
-                delta_bytes = full_bytes
-            else:
-                delta_bytes = encode(changed_since(self._acked[i], full, self._acked_round[i]))
+            full_bytes, delta_bytes = self.senders[i].send(closed, r, pos)
             raw, packed = occupancy_grid_bytes(own)
             self.totals.bytes_grid += raw
             self.totals.bytes_grid_zlib += packed
             self.totals.bytes_sparse += len(full_bytes)
             self.totals.bytes_sparse_delta += len(delta_bytes)
-            self.centre.receive(decode(delta_bytes if self.mode == "delta" else full_bytes))
+            sent = delta_bytes if self.mode == "delta" else full_bytes
+            self.centre.receive(decode(sent))
             # The simulated link is reliable: the centre acknowledges every message at once.
-            self._acked[i] = full.code_grid()
-            self._acked_round[i] = r
+            self.senders[i].acknowledged(sent)
         state = self.centre.state()
         self.totals.iou.append(free_iou(state == CellState.FREE, team_free))
         self.totals.rounds += 1

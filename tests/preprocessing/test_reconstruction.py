@@ -1,0 +1,218 @@
+"""Sparse frontier maps and the centre's reconstruction on hand-drawn maps, random maps and merges."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import bool_grid, cells, state_grid
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mrexplore.preprocessing.frontiers import detect_frontiers
+from mrexplore.preprocessing.reconstruction import CentreMap, fill_free, fill_paper, free_iou, reconstruct
+from mrexplore.preprocessing.sparse_codec import decode, encode
+from mrexplore.preprocessing.sparse_map import (
+    changed_since,
+    component_seeds,
+    neighbour_codes,
+    sparse_frontier_map,
+)
+from mrexplore.preprocessing.transmission import RobotSender
+from mrexplore.types import CellState, MrExploreError
+
+F, O, U = CellState.FREE, CellState.OCCUPIED, CellState.UNKNOWN  # noqa: E741
+
+# Two rooms joined by a one-cell corridor (no interior cell in it), a room behind a wall seen through
+# nothing (its own component), a one-cell pocket of free space inside the wall, and unknown on the right.
+ROOMS = """
+    ###############
+    #....#########?
+    #....#.....#..?
+    #...........#.?
+    #....#.....#..?
+    ######.....####
+    ###.##.....####
+    ###############
+"""
+
+
+def rim(state: np.ndarray) -> np.ndarray:
+    """Free cells and the non-free cells 4-adjacent to them: what a boundary code describes."""
+    free = state == F
+    pad = np.pad(free, 1)
+    near = pad[:-2, 1:-1] | pad[2:, 1:-1] | pad[1:-1, :-2] | pad[1:-1, 2:]
+    return free | near
+
+
+def roundtrip(state: np.ndarray, position: tuple[int, int]) -> np.ndarray:
+    message = decode(encode(sparse_frontier_map(state, 0, 0, position)))
+    return reconstruct(message.code_grid(), message.seeds)
+
+
+def test_codes_carry_the_paper_labels() -> None:
+    state = state_grid(ROOMS)
+    codes = neighbour_codes(state)
+    f = detect_frontiers(state)
+    assert np.array_equal((codes & 0x0F) != 0, f.un_mask)  # F_un: an unknown neighbour
+    assert np.array_equal((codes >> 4) != 0, f.occ_mask)  # F_occ: an occupied neighbour
+
+
+def test_seeds_one_per_component_with_interior() -> None:
+    state = state_grid(ROOMS)
+    seeds = component_seeds(state == F, neighbour_codes(state), (3, 2))
+    # The robot's room seeds at the robot; the right room (interior) at its first interior cell; the
+    # pocket at (6, 3) and the strip at (2..4, 12..13) are all boundary and need no seed.
+    assert [divmod(int(s), 15) for s in seeds] == [(3, 2)]
+    state[3, 5] = O  # cut the corridor: the rooms become two components
+    seeds = component_seeds(state == F, neighbour_codes(state), (3, 2))
+    assert [divmod(int(s), 15) for s in seeds] == [(3, 2), (3, 7)]
+
+
+def test_roundtrip_exact_on_hand_drawn_map() -> None:
+    state = state_grid(ROOMS)
+    rebuilt = roundtrip(state, (3, 2))
+    near = rim(state)
+    assert np.array_equal(rebuilt == F, state == F)
+    assert np.array_equal(rebuilt[near], state[near])
+    assert (rebuilt[~near] == U).all()  # the inside of walls is never sent
+
+
+def test_paper_fill_loses_the_room_behind_a_thin_corridor() -> None:
+    state = state_grid(ROOMS)
+    boundary = detect_frontiers(state).un_mask | detect_frontiers(state).occ_mask
+    paper = fill_paper(boundary, (3, 2))
+    lost = (state == F) & ~paper
+    # The second room's interior: its free cells off the boundary, behind the corridor cell (3, 5).
+    assert cells_of(lost) == cells("""
+        ...............
+        ...............
+        ...............
+        ......xxxxx....
+        .......xxx.....
+        .......xxx.....
+        ...............
+        ...............
+    """)
+    assert free_iou(paper, state == F) < free_iou(roundtrip(state, (3, 2)) == F, state == F) == 1.0
+
+
+def cells_of(mask: np.ndarray) -> list[list[int]]:
+    return np.argwhere(mask).tolist()
+
+
+def test_fill_stays_inside_and_crosses_doors_by_codes() -> None:
+    state = state_grid("""
+        #########
+        #...#...#
+        #.......#
+        #...#...#
+        #########
+    """)
+    codes = neighbour_codes(state)
+    assert np.array_equal(fill_free(codes, np.array([2 * 9 + 2])), state == F)
+    assert np.array_equal(fill_free(codes, np.zeros(0, np.int64)), codes != 0)  # no seed: boundary only
+
+
+@st.composite
+def random_maps(draw: st.DrawFn) -> tuple[np.ndarray, tuple[int, int]]:
+    h = draw(st.integers(3, 14))
+    w = draw(st.integers(3, 14))
+    flat = draw(st.lists(st.sampled_from([F, F, F, O, U]), min_size=h * w, max_size=h * w))
+    state = np.array(flat, dtype=np.uint8).reshape(h, w)
+    r, c = draw(st.integers(0, h - 1)), draw(st.integers(0, w - 1))
+    state[r, c] = F
+    return state, (r, c)
+
+
+@settings(max_examples=300, deadline=None)
+@given(random_maps())
+def test_roundtrip_exact_on_random_maps(case: tuple[np.ndarray, tuple[int, int]]) -> None:
+    state, position = case
+    rebuilt = roundtrip(state, position)
+    near = rim(state)
+    assert np.array_equal(rebuilt == F, state == F)
+    assert np.array_equal(rebuilt[near], state[near])
+
+
+def two_robots() -> tuple[np.ndarray, np.ndarray]:
+    a = state_grid("""
+        ##########
+        #.....????
+        #.....????
+        ######????
+    """)
+    b = state_grid("""
+        ##########
+        ???.....?#
+        ???......#
+        ???#######
+    """)
+    return a, b
+
+
+def test_merge_drops_frontiers_inside_space_another_robot_saw() -> None:
+    a, b = two_robots()
+    centre = CentreMap(2, a.shape, closing_size_cells=1)
+    centre.receive(sparse_frontier_map(a, 0, 0, (1, 1)))
+    centre.receive(sparse_frontier_map(b, 1, 0, (1, 7)))
+    merged = centre.state()
+    assert np.array_equal(
+        merged == F,
+        bool_grid(
+            """
+        ##########
+        #.......??
+        #........#
+        ######????
+    """,
+            ".",
+        ),
+    )
+    # Robot a's F_un (column 5) lies in b's free space; the team's frontier is where (1, 8) is unknown.
+    assert detect_frontiers(merged).un_rc.tolist() == [[1, 7], [2, 8]]
+
+
+def test_merge_prefers_obstacles_on_conflict() -> None:
+    a = state_grid("....\n....")
+    b = state_grid("..#.\n....")
+    centre = CentreMap(2, a.shape, closing_size_cells=1)
+    centre.receive(sparse_frontier_map(a, 0, 0, (0, 0)))
+    centre.receive(sparse_frontier_map(b, 1, 0, (0, 0)))
+    assert centre.state()[0, 2] == O
+
+
+def test_deltas_rebuild_what_full_maps_rebuild() -> None:
+    rng = np.random.default_rng(3)
+    truth = state_grid(ROOMS)
+    full_centre = CentreMap(1, truth.shape, 1)
+    delta_centre = CentreMap(1, truth.shape, 1)
+    sender = RobotSender(0, truth.shape)
+    kinds = []
+    for rnd, col in enumerate((4, 7, 10, 15, 15)):
+        seen = np.full(truth.shape, U, np.uint8)
+        seen[:, :col] = truth[:, :col]
+        if rnd < 3:
+            seen[rng.random(truth.shape) < 0.05] = U  # gaps between beams, filled in later rounds
+        seen[3, 2] = F
+        full, incremental = sender.send(seen, rnd, (3, 2))
+        full_centre.receive(decode(full))
+        delta_centre.receive(decode(incremental))
+        sender.acknowledged(incremental)
+        assert np.array_equal(full_centre.state(), delta_centre.state())
+        assert len(incremental) <= len(full)
+        kinds.append(decode(incremental).is_delta)
+    # The first map is whole; a round with nothing new costs a header and the seeds.
+    assert not kinds[0] and kinds[-1] and len(decode(incremental).cells) == 0
+
+
+def test_delta_on_the_wrong_base_is_refused() -> None:
+    a, _ = two_robots()
+    centre = CentreMap(1, a.shape, 1)
+    first = sparse_frontier_map(a, 0, 0, (1, 1))
+    centre.receive(first)
+    later = changed_since(first.code_grid(), sparse_frontier_map(a, 0, 5, (1, 1)), 4)
+    with pytest.raises(MrExploreError) as err:
+        centre.receive(later)
+    assert str(err.value) == (
+        "delta from robot 0 applies to round 4, the centre holds round 0; ask the robot for a full map"
+    )
