@@ -34,6 +34,13 @@ def test_json_run_prints_exactly_one_object(capsys) -> None:
         "plan_ms_p95",
         "wall_s",
         "done_reason",
+        "rounds",
+        "bytes_grid",
+        "bytes_grid_zlib",
+        "bytes_sparse",
+        "bytes_sparse_delta",
+        "reconstruction_iou_min",
+        "reconstruction_iou_mean",
         "strategy",
         "map",
         "robots",
@@ -80,6 +87,10 @@ def test_given_starts(capsys) -> None:
         ),
         (["--resolution", "0"], "mrexplore: error: resolution must be > 0 metres, got 0.0"),
         (["--commitment", "2"], "mrexplore: error: commitment must be in [0, 1] or None, got 2.0"),
+        (
+            ["--save-map", "no/such/folder/map"],
+            "mrexplore: error: --save-map folder no/such/folder does not exist; create it first",
+        ),
     ],
 )
 def test_bad_input_one_line_exit_2(capsys, args: list[str], message: str) -> None:
@@ -113,3 +124,13 @@ def test_unknown_option_is_one_line(capsys) -> None:
     assert exit_info.value.code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "unrecognized arguments: --frobnicate" in err
+
+
+def test_saved_centre_map_loads_back(tmp_path, capsys) -> None:
+    assert main(["explore", *FAST, "--json", "--save-map", str(tmp_path / "centre")]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    assert (tmp_path / "centre.yaml").exists() and (tmp_path / "centre.pgm").exists()
+    # The explored map is a map like any other: exploring it again covers it.
+    assert main(["explore", "--map", str(tmp_path / "centre.yaml"), "--resolution", "0.1", "--json"]) == 0
+    again = json.loads(capsys.readouterr().out)
+    assert again["map"] == "centre" and again["coverage"] >= 0.99 and rec["coverage"] >= 0.99

@@ -14,6 +14,7 @@ import numpy as np
 from mrexplore.bench.runner import EpisodeSpec, expand_maps, run_bench, write_report
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig, config_to_dict
 from mrexplore.maps.loaders import DEFAULT_MAP, load_map
+from mrexplore.maps.map_saver import save_ros_map
 from mrexplore.mission import run_mission
 from mrexplore.render import GifRecorder, save_png
 from mrexplore.sim.starts import draw_starts, starts_from_xy
@@ -81,6 +82,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ex.add_argument("--gif", help="write an animation of the run to this path")
     ex.add_argument("--png", help="write a picture of the final map to this path")
+    ex.add_argument(
+        "--save-map",
+        metavar="PATH",
+        help="write the centre's final map as ROS map_server PATH.yaml + PATH.pgm",
+    )
+    ex.add_argument(
+        "--transmission",
+        choices=("delta", "full"),
+        default=MissionConfig.transmission,
+        help="what the centre rebuilds from: sparse-map deltas (default) or whole sparse maps (the paper's)",
+    )
     ex.add_argument("--json", action="store_true", help="print one JSON object with the measures on stdout")
     ex.add_argument(
         "--progress",
@@ -142,8 +154,10 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
 def _explore(args: argparse.Namespace) -> dict[str, Any]:
     map_cfg = MapConfig(resolution_m=args.resolution, pixel_size_m=args.pixel_size)
     sim_cfg = SimConfig(robots=args.robots)
-    mission_cfg = MissionConfig(max_steps=args.max_steps)
+    mission_cfg = MissionConfig(max_steps=args.max_steps, transmission=args.transmission)
     strategy = make_strategy(args.strategy, GlobalPlanningConfig(commitment=args.commitment), local=not args.no_local)
+    if args.save_map and not Path(args.save_map).resolve().parent.is_dir():
+        raise MrExploreError(f"--save-map folder {Path(args.save_map).parent} does not exist; create it first")
     truth = load_map(args.map, map_cfg)
     starts = None
     if args.start:
@@ -170,6 +184,8 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
         recorder.save_gif(args.gif)
     if recorder is not None and args.png:
         save_png(recorder.final_frame(), args.png)
+    if args.save_map:
+        save_ros_map(result.final_state, truth.frame, args.save_map)
     record: dict[str, Any] = {
         "strategy": strategy.name,
         "map": truth.name,
@@ -189,6 +205,10 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
     return record
 
 
+def _kb(n: int) -> str:
+    return f"{n / 1e3:.1f} kB"
+
+
 def _summary(rec: dict[str, Any]) -> str:
     def at(key: str) -> str:
         return "never" if rec[key] is None else str(rec[key])
@@ -202,6 +222,9 @@ def _summary(rec: dict[str, Any]) -> str:
             f"overlap {rec['overlap']:.2f}",
             f"  {rec['decisions']} decisions, {rec['plan_ms_mean']:.1f} ms mean, {rec['plan_ms_p95']:.1f} ms p95; "
             f"wall {rec['wall_s']:.1f} s; ended: {rec['done_reason']}",
+            f"  sent over {rec['rounds']} rounds: sparse {_kb(rec['bytes_sparse'])}, delta "
+            f"{_kb(rec['bytes_sparse_delta'])}; grid {_kb(rec['bytes_grid'])}, zlib {_kb(rec['bytes_grid_zlib'])}; "
+            f"centre map IoU min {rec['reconstruction_iou_min']:.4f}",
         ]
     )
 
