@@ -7,6 +7,7 @@ import pytest
 from conftest import bool_grid, cells, state_grid
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy import ndimage
 
 from mrexplore.preprocessing.frontiers import detect_frontiers
 from mrexplore.preprocessing.reconstruction import CentreMap, fill_free, fill_paper, free_iou, reconstruct
@@ -216,3 +217,14 @@ def test_delta_on_the_wrong_base_is_refused() -> None:
     assert str(err.value) == (
         "delta from robot 0 applies to round 4, the centre holds round 0; ask the robot for a full map"
     )
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.data())
+def test_paper_fill_is_the_seed_component_off_the_fence(data: st.DataObject) -> None:
+    h, w = data.draw(st.integers(1, 12)), data.draw(st.integers(1, 12))
+    fence = np.array(data.draw(st.lists(st.booleans(), min_size=h * w, max_size=h * w)), bool).reshape(h, w)
+    seed = (data.draw(st.integers(0, h - 1)), data.draw(st.integers(0, w - 1)))
+    labels, _ = ndimage.label(~fence)
+    expected = fence | ((labels == labels[seed]) & ~fence)
+    assert np.array_equal(fill_paper(fence, seed), expected)

@@ -13,80 +13,18 @@ as the fence, no neighbour codes.
 
 from __future__ import annotations
 
-import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
 from mrexplore.preprocessing.frontiers import close_unknown_holes
+from mrexplore.preprocessing.scanline_fill import scanline_fill
 from mrexplore.preprocessing.sparse_map import DIRECTIONS, SparseFrontierMap, apply_delta
 from mrexplore.types import BoolGrid, CellState, GridRC, MrExploreError, StateGrid
 
 __all__ = ["fill_free", "fill_paper", "reconstruct", "merge_reconstructions", "CentreMap", "free_iou"]
 
-_UP, _DOWN, _LEFT, _RIGHT = 0, 1, 2, 3
 _NOT_HEARD = -1
 """Round held for a robot the centre has not heard from."""
-
-
-@nb.njit(cache=True, inline="always")
-def _blocked(code: int, d: int) -> bool:  # pragma: no cover - numba
-    return ((code >> d) | (code >> (4 + d))) & 1 == 1
-
-
-@nb.njit(cache=True, inline="always")
-def _push(stack: np.ndarray, sp: int, r: int, c: int) -> tuple[np.ndarray, int]:  # pragma: no cover - numba
-    if sp == len(stack):
-        grown = np.empty((2 * len(stack), 2), dtype=np.int64)
-        grown[:sp] = stack
-        stack = grown
-    stack[sp, 0] = r
-    stack[sp, 1] = c
-    return stack, sp + 1
-
-
-@nb.njit(cache=True)
-def _scanline_fill(
-    codes: np.ndarray, seeds: np.ndarray, fence: np.ndarray, filled: np.ndarray
-) -> None:  # pragma: no cover - numba
-    """Scan-line flood fill into ``filled``. With ``fence`` empty, moves follow the codes; otherwise a move
-    may leave only a cell outside the fence (the paper's rule), and codes are not read."""
-    H, W = filled.shape
-    use_fence = fence.size > 0
-    stack = np.empty((max(64, len(seeds)), 2), dtype=np.int64)
-    sp = 0
-    for s in seeds:
-        stack, sp = _push(stack, sp, s // W, s % W)
-    while sp > 0:
-        sp -= 1
-        r = stack[sp, 0]
-        c = stack[sp, 1]
-        if filled[r, c]:
-            continue
-        lo = c
-        while lo > 0 and not filled[r, lo - 1]:
-            if (fence[r, lo] or fence[r, lo - 1]) if use_fence else _blocked(codes[r, lo], _LEFT):
-                break
-            lo -= 1
-        hi = c
-        while hi < W - 1 and not filled[r, hi + 1]:
-            if (fence[r, hi] or fence[r, hi + 1]) if use_fence else _blocked(codes[r, hi], _RIGHT):
-                break
-            hi += 1
-        for x in range(lo, hi + 1):
-            filled[r, x] = True
-        for dr, bit in ((-1, _UP), (1, _DOWN)):
-            rr = r + dr
-            if rr < 0 or rr >= H:
-                continue
-            in_run = False
-            for x in range(lo, hi + 1):
-                if use_fence:
-                    ok = not fence[r, x] and not filled[rr, x]
-                else:
-                    ok = not _blocked(codes[r, x], bit) and not filled[rr, x]
-                if ok and not in_run:
-                    stack, sp = _push(stack, sp, rr, x)
-                in_run = ok
 
 
 def fill_free(codes: NDArray[np.uint8], seeds: NDArray[np.int64]) -> BoolGrid:
@@ -105,7 +43,7 @@ def fill_free(codes: NDArray[np.uint8], seeds: NDArray[np.int64]) -> BoolGrid:
     True
     """
     filled = np.zeros(codes.shape, dtype=bool)
-    _scanline_fill(codes, np.asarray(seeds, dtype=np.int64), np.zeros((0, 0), dtype=bool), filled)
+    scanline_fill(codes, np.asarray(seeds, dtype=np.int64), np.zeros((0, 0), dtype=bool), filled)
     return filled | (codes != 0)
 
 
@@ -121,7 +59,7 @@ def fill_paper(boundary: BoolGrid, seed_rc: GridRC) -> BoolGrid:
     r, c = seed_rc
     if not boundary[r, c]:
         seeds = np.array([r * boundary.shape[1] + c], np.int64)
-        _scanline_fill(np.zeros((1, 1), np.uint8), seeds, np.ascontiguousarray(boundary), filled)
+        scanline_fill(np.zeros((1, 1), np.uint8), seeds, np.ascontiguousarray(boundary), filled)
     return filled | boundary
 
 

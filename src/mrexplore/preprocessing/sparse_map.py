@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
 
+from mrexplore.preprocessing.scanline_fill import neighbour_codes_kernel, pick_seeds
 from mrexplore.types import BoolGrid, CellState, GridRC, StateGrid
 
 __all__ = [
@@ -105,36 +105,16 @@ def neighbour_codes(state: StateGrid) -> NDArray[np.uint8]:
     >>> neighbour_codes(g).tolist()  # (1,1): occupied up (bit 4), unknown right (bit 3)
     [[0, 0, 0], [16, 24, 0], [0, 0, 1]]
     """
-    H, W = state.shape
-    padded = np.full((H + 2, W + 2), CellState.FREE, dtype=np.uint8)
-    padded[1:-1, 1:-1] = state
-    codes = np.zeros((H, W), dtype=np.uint8)
-    for d, (dr, dc) in enumerate(DIRECTIONS):
-        nb = padded[1 + dr : 1 + dr + H, 1 + dc : 1 + dc + W]
-        codes |= (nb == CellState.UNKNOWN).astype(np.uint8) << d
-        codes |= (nb == CellState.OCCUPIED).astype(np.uint8) << (4 + d)
-    codes[state != CellState.FREE] = 0
-    return codes
+    return neighbour_codes_kernel(np.ascontiguousarray(state, dtype=np.uint8))
 
 
 def component_seeds(free: BoolGrid, codes: NDArray[np.uint8], position_rc: GridRC) -> NDArray[np.int64]:
     """One seed per 4-connected free component that has an interior cell (code 0): the robot's cell for
-    its own component, the first interior cell in row-major order for the others. Components made of
-    boundary cells only need none: every one of their cells is in the message."""
-    labels, n = ndimage.label(free)
-    if n == 0:
-        return np.zeros(0, dtype=np.int64)
-    interior = free & (codes == 0)
-    flat_labels = labels.ravel()
-    idx = np.flatnonzero(interior.ravel())
-    comp = flat_labels[idx]
-    _, first = np.unique(comp, return_index=True)
-    seeds = {int(comp[i]): int(idx[i]) for i in first}
+    its own component, the first interior cell in row-major order for the others, sorted. Components
+    made of boundary cells only need none: every one of their cells is in the message."""
     r, c = position_rc
-    own = int(labels[r, c])
-    if own in seeds:
-        seeds[own] = r * free.shape[1] + c
-    return np.array(sorted(seeds.values()), dtype=np.int64)
+    seeds = pick_seeds(np.ascontiguousarray(codes), np.ascontiguousarray(free), r * free.shape[1] + c)
+    return np.sort(seeds)
 
 
 def sparse_frontier_map(state: StateGrid, robot: int, round_: int, position_rc: GridRC) -> SparseFrontierMap:
