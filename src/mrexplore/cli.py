@@ -11,7 +11,8 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from mrexplore.bench.runner import EpisodeSpec, expand_maps, run_bench, write_report
+from mrexplore.bench.report import write_report
+from mrexplore.bench.runner import EpisodeSpec, expand_maps, run_bench
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig, config_to_dict
 from mrexplore.maps.loaders import DEFAULT_MAP, load_map
 from mrexplore.maps.map_saver import save_ros_map
@@ -107,6 +108,11 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("--seeds", type=int, default=3, help="seeds 0..N-1 per map (default 3)")
     be.add_argument("--out", required=True, help="folder for results.csv and report.md")
     be.add_argument("--workers", type=int, default=0, help="worker processes (default: one per core)")
+    be.add_argument(
+        "--ray-address",
+        default=None,
+        help="run the episodes as Ray tasks: 'local' starts Ray here, 'auto' or HOST:PORT joins a cluster",
+    )
     be.add_argument("--commitment", type=float, default=None, help=COMMITMENT_HELP)
     be.add_argument("--resolution", type=float, default=MapConfig.resolution_m, help="cell size, metres")
     be.add_argument("--max-steps", type=int, default=MissionConfig.max_steps, help="step budget per episode")
@@ -145,7 +151,7 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
         for seed in range(args.seeds)
     ]
     out = Path(args.out)
-    ran = run_bench(specs, out / "results.csv", args.workers, args.progress)
+    ran = run_bench(specs, out / "results.csv", args.workers, args.progress, args.ray_address)
     command = "mrexplore " + " ".join(argv)
     write_report(out / "results.csv", out / "report.md", strategies, command)
     return f"{ran} episodes run, {len(specs) - ran} already done; wrote {out / 'results.csv'} and {out / 'report.md'}"

@@ -23,7 +23,7 @@ from mrexplore.config import MissionConfig, SimConfig
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.paths.astar import astar_path
 from mrexplore.preprocessing.transmission import TeamLink
-from mrexplore.sim.measures import EpisodeMeasures
+from mrexplore.sim.measures import EpisodeMeasures, lower_bound_steps
 from mrexplore.sim.starts import draw_starts
 from mrexplore.sim.world import ExplorationSim
 from mrexplore.strategies import NO_GOAL, Decision, ExplorationPipeline
@@ -176,5 +176,6 @@ def run_mission(
         time.perf_counter() - t0,
         done_reason,
         link.totals.as_measures(),
+        lower_bound_steps(~truth.occupied, sim.explorable, starts_rc, truth.resolution_m, sim_cfg),
     )
     return MissionResult(measures, np.asarray(curve), np.asarray(starts_rc, dtype=np.int32), state, sim)

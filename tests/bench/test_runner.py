@@ -13,7 +13,16 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from mrexplore.bench.runner import COLUMNS, EpisodeSpec, expand_maps, read_rows, run_bench, size_class
+from mrexplore.bench.runner import (
+    COLUMNS,
+    EpisodeSpec,
+    dataset_of,
+    expand_maps,
+    parse_curve,
+    read_rows,
+    run_bench,
+    size_class,
+)
 from mrexplore.cli import main
 from mrexplore.types import MrExploreError
 
@@ -111,6 +120,39 @@ def test_bench_cli_writes_report(tmp_path, capsys) -> None:
     report = (tmp_path / "report.md").read_text()
     assert "Made by: `mrexplore bench --maps generated:2" in report
     assert "| hier | " in report and "| hier-nolocal | " in report
+    assert "## Table II: bytes sent per episode" in report and "| generated middle | 2 |" in report
+    assert "![coverage.png](coverage.png)" in report
+    for name in ("coverage.png", "steps.png"):
+        with Image.open(tmp_path / name) as img:
+            assert img.size[0] > 250
+
+
+def test_bench_through_ray_on_a_local_instance(tmp_path) -> None:
+    pytest.importorskip("ray", reason="Ray is the optional scale-out path: pip install 'mrexplore[ray]'")
+    specs = [EpisodeSpec("generated:1", "nearest", 2, seed, **FAST) for seed in (0, 1)]
+    out = tmp_path / "results.csv"
+    assert run_bench(specs, out, workers=2, ray_address="local") == 2
+    local = tmp_path / "local.csv"
+    run_bench(specs, local, workers=1)
+    drop = {"wall_s", "plan_ms_mean", "plan_ms_p95"}
+    by_seed = [
+        sorted(({k: v for k, v in r.items() if k not in drop} for r in read_rows(p)), key=str) for p in (out, local)
+    ]
+    assert by_seed[0] == by_seed[1]  # the same episodes, whichever runner ran them
+
+
+def test_old_results_file_is_refused(tmp_path) -> None:
+    out = tmp_path / "results.csv"
+    out.write_text("map,strategy\n")
+    with pytest.raises(MrExploreError, match="has other columns than this version writes; pass a new --out folder"):
+        run_bench([EpisodeSpec("generated:1", "nearest", 2, 0, **FAST)], out, workers=1)
+
+
+def test_dataset_and_curve_fields() -> None:
+    assert dataset_of("../shared/maps/houseexpo/png/x.png") == "houseexpo"
+    assert dataset_of("/data/kth_floorplans/a.yaml") == "kth" and dataset_of("generated:3") == "generated"
+    steps, cov = parse_curve("0:0.1000 50:0.5000 73:1.0000")
+    assert steps.tolist() == [0, 50, 73] and cov.tolist() == [0.1, 0.5, 1.0]
 
 
 def test_bench_refuses_unknown_strategy(tmp_path, capsys) -> None:

@@ -25,16 +25,32 @@ from mrexplore.mission import run_mission
 from mrexplore.strategies import make_strategy
 from mrexplore.types import MrExploreError
 
-__all__ = ["EpisodeSpec", "run_episode", "run_bench", "read_rows", "size_class", "COLUMNS", "MAP_SUFFIXES"]
+__all__ = [
+    "EpisodeSpec",
+    "run_episode",
+    "run_bench",
+    "read_rows",
+    "size_class",
+    "dataset_of",
+    "parse_curve",
+    "expand_maps",
+    "COLUMNS",
+    "MAP_SUFFIXES",
+]
 
 MAP_SUFFIXES = (".yaml", ".yml", ".png", ".pgm", ".json")
 SMALL_M2 = 100.0
 LARGE_M2 = 300.0
+CURVE_EVERY_STEPS = 50
+"""The coverage curve is kept in the CSV every this many steps (and at the last step)."""
 COLUMNS = [
-    "map", "map_path", "strategy", "robots", "seed", "size_class", "free_area_m2",
-    "steps", "coverage", "steps_to_90", "steps_to_95", "steps_to_99", "path_len_max_m", "path_len_sum_m",
-    "overlap", "decisions", "plan_ms_mean", "plan_ms_p95", "wall_s", "done_reason",
+    "map", "map_path", "dataset", "strategy", "robots", "seed", "size_class", "free_area_m2",
+    "steps", "coverage", "steps_to_90", "steps_to_95", "steps_to_99", "lower_bound_steps",
+    "path_len_max_m", "path_len_sum_m", "overlap", "decisions", "plan_ms_mean", "plan_ms_p95", "wall_s",
+    "done_reason", "rounds", "bytes_grid", "bytes_grid_zlib", "bytes_sparse", "bytes_sparse_delta",
+    "reconstruction_iou_min", "reconstruction_iou_mean", "coverage_curve",
 ]  # fmt: skip
+_DATASETS = ("houseexpo", "kth", "ros", "dungeon")
 
 
 @dataclass(frozen=True)
@@ -61,6 +77,30 @@ def size_class(free_area_m2: float) -> str:
     return "middle" if free_area_m2 <= LARGE_M2 else "large"
 
 
+def dataset_of(map_path: str) -> str:
+    """The collection a map comes from, by a folder name on its path (``generated`` for built-in maps)."""
+    if map_path.startswith("generated"):
+        return "generated"
+    parts = [p.lower() for p in Path(map_path).parts[:-1]]
+    for name in _DATASETS:
+        if any(p.startswith(name) for p in parts):
+            return name
+    return Path(map_path).parent.name or "other"
+
+
+def _curve_text(curve: np.ndarray) -> str:
+    idx = list(range(0, len(curve), CURVE_EVERY_STEPS))
+    if idx[-1] != len(curve) - 1:
+        idx.append(len(curve) - 1)
+    return " ".join(f"{i}:{curve[i]:.4f}" for i in idx)
+
+
+def parse_curve(text: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(steps, coverage)`` arrays of a row's ``coverage_curve`` field."""
+    pairs = [item.split(":") for item in text.split()]
+    return np.array([int(a) for a, _ in pairs]), np.array([float(b) for _, b in pairs])
+
+
 def run_episode(spec: EpisodeSpec) -> dict[str, Any]:
     """Run one episode and return its CSV row."""
     truth = load_map(spec.map_path, MapConfig(resolution_m=spec.resolution_m))
@@ -77,12 +117,14 @@ def run_episode(spec: EpisodeSpec) -> dict[str, Any]:
     return {
         "map": truth.name,
         "map_path": spec.map_path,
+        "dataset": dataset_of(spec.map_path),
         "strategy": spec.strategy,
         "robots": spec.robots,
         "seed": spec.seed,
         "size_class": size_class(free_m2),
         "free_area_m2": round(free_m2, 2),
         **result.measures.to_dict(),
+        "coverage_curve": _curve_text(result.coverage_curve),
     }
 
 
@@ -98,6 +140,17 @@ def _done_keys(rows: Iterable[dict[str, str]]) -> set[tuple[str, str, int, int]]
     return {(r["map_path"], r["strategy"], int(r["robots"]), int(r["seed"])) for r in rows}
 
 
+def _check_columns(path: Path) -> None:
+    if not path.exists():
+        return
+    with open(path, newline="") as f:
+        header = next(csv.reader(f), None)
+    if header is not None and header != COLUMNS:
+        raise MrExploreError(
+            f"{path} has other columns than this version writes; pass a new --out folder to start afresh"
+        )
+
+
 def _append(path: Path, row: dict[str, Any]) -> None:
     new = not path.exists()
     with open(path, "a", newline="") as f:
@@ -109,20 +162,31 @@ def _append(path: Path, row: dict[str, Any]) -> None:
         os.fsync(f.fileno())
 
 
-def run_bench(specs: Sequence[EpisodeSpec], results_csv: Path, workers: int = 0, progress: bool | None = None) -> int:
-    """Run the episodes not yet in ``results_csv``, ``workers`` at a time (0: one per core).
+def run_bench(
+    specs: Sequence[EpisodeSpec],
+    results_csv: Path,
+    workers: int = 0,
+    progress: bool | None = None,
+    ray_address: str | None = None,
+) -> int:
+    """Run the episodes not yet in ``results_csv``, ``workers`` at a time (0: one per core), in local
+    worker processes, or as Ray tasks when ``ray_address`` is given (``local`` starts a Ray instance on
+    this machine; ``auto`` or ``HOST:PORT`` joins a running cluster).
 
     Returns the number of episodes run now. Each finished episode is appended (and flushed) at once.
     """
     for s in specs:
         make_strategy(s.strategy)  # unknown names fail before any work starts
     results_csv.parent.mkdir(parents=True, exist_ok=True)
+    _check_columns(results_csv)
     done = _done_keys(read_rows(results_csv))
     todo = [s for s in specs if s.key not in done]
     show = sys.stderr.isatty() if progress is None else progress
     bar = tqdm(total=len(specs), initial=len(specs) - len(todo), unit="ep", disable=not show)
     workers = workers or os.cpu_count() or 1
-    if workers == 1:
+    if ray_address is not None:
+        _run_ray(todo, results_csv, workers, ray_address, bar)
+    elif workers == 1:
         for s in todo:
             _append(results_csv, run_episode(s))
             bar.update()
@@ -138,6 +202,28 @@ def run_bench(specs: Sequence[EpisodeSpec], results_csv: Path, workers: int = 0,
                     bar.update()
     bar.close()
     return len(todo)
+
+
+def _run_ray(todo: list[EpisodeSpec], results_csv: Path, workers: int, address: str, bar: tqdm) -> None:
+    try:
+        import ray
+    except ImportError:
+        raise MrExploreError("--ray-address needs Ray; install it with: pip install 'mrexplore[ray]'") from None
+    started = not ray.is_initialized()
+    if started:
+        kwargs: dict[str, Any] = {"num_cpus": workers} if address == "local" else {"address": address}
+        ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
+    try:
+        remote = ray.remote(num_cpus=1)(run_episode)
+        pending = [remote.remote(s) for s in todo]
+        while pending:
+            finished, pending = ray.wait(pending, num_returns=1)
+            for ref in finished:
+                _append(results_csv, ray.get(ref))
+                bar.update()
+    finally:
+        if started:
+            ray.shutdown()
 
 
 def expand_maps(items: Sequence[str]) -> list[str]:
@@ -162,77 +248,4 @@ def expand_maps(items: Sequence[str]) -> list[str]:
             raise MrExploreError(f"map not found: {item}; pass map files or folders with --maps")
     if not out:
         raise MrExploreError(f"no map files in {', '.join(items)}; pass map files or folders with --maps")
-    return out
-
-
-def _mean_std(values: list[float]) -> str:
-    a = np.asarray(values, dtype=np.float64)
-    return f"{a.mean():.1f} ± {a.std():.1f}" if len(a) else "–"
-
-
-def steps_table(rows: list[dict[str, str]], strategies: Sequence[str]) -> str:
-    """Markdown table: per size class and strategy, coverage % and steps mean ± std (Table I's layout)."""
-    classes = [c for c in ("small", "middle", "large") if any(r["size_class"] == c for r in rows)]
-    head = "| strategy | " + " | ".join(f"{c} cov. % | {c} steps" for c in classes) + " |"
-    lines = [head, "|" + " --- |" * (1 + 2 * len(classes))]
-    for s in strategies:
-        cells = []
-        for c in classes:
-            sel = [r for r in rows if r["strategy"] == s and r["size_class"] == c]
-            cov = [100 * float(r["coverage"]) for r in sel]
-            cells += [f"{np.mean(cov):.2f}" if cov else "–", _mean_std([float(r["steps"]) for r in sel])]
-        lines.append(f"| {s} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
-
-
-def per_map_table(rows: list[dict[str, str]], strategies: Sequence[str]) -> str:
-    """Markdown table: steps (mean over seeds) and the lowest coverage per map and strategy."""
-    maps = sorted(
-        {(r["size_class"], r["map"]) for r in rows}, key=lambda t: (("small", "middle", "large").index(t[0]), t[1])
-    )
-    lines = ["| map | class | " + " | ".join(strategies) + " |", "|" + " --- |" * (2 + len(strategies))]
-    for cls, m in maps:
-        cells = []
-        for s in strategies:
-            sel = [r for r in rows if r["map"] == m and r["strategy"] == s]
-            if not sel:
-                cells.append("–")
-                continue
-            steps = np.mean([float(r["steps"]) for r in sel])
-            cov = min(100 * float(r["coverage"]) for r in sel)
-            cells.append(f"{steps:.0f} ({cov:.1f}%)")
-        lines.append(f"| {m[:16]} | {cls} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
-
-
-def write_report(results_csv: Path, report_md: Path, strategies: Sequence[str], command: str) -> None:
-    """Write the markdown report of a results CSV (the tables above, with the command that made it)."""
-    rows = [r for r in read_rows(results_csv) if r["strategy"] in strategies]
-    n_maps = len({r["map"] for r in rows})
-    seeds = sorted({int(r["seed"]) for r in rows})
-    text = "\n\n".join(
-        [
-            "# Benchmark report",
-            f"Made by: `{command}`",
-            f"{len(rows)} episodes: {n_maps} maps, strategies {', '.join(strategies)}, seeds {seeds}. "
-            "Size classes by explorable free area: small < 100 m², middle 100-300 m², large > 300 m². "
-            "Steps: mean ± std over maps and seeds; coverage: mean.",
-            "## Coverage and steps by size class (Table I layout)",
-            steps_table(rows, strategies),
-            "## Steps per map (mean over seeds; lowest coverage in brackets)",
-            per_map_table(rows, strategies),
-            "## Ends",
-            "\n".join(
-                f"- {s}: " + ", ".join(f"{k} {v}" for k, v in sorted(_count(rows, s).items())) for s in strategies
-            ),
-        ]
-    )
-    report_md.write_text(text + "\n")
-
-
-def _count(rows: list[dict[str, str]], strategy: str) -> dict[str, int]:
-    out: dict[str, int] = {}
-    for r in rows:
-        if r["strategy"] == strategy:
-            out[r["done_reason"]] = out.get(r["done_reason"], 0) + 1
     return out

@@ -2,15 +2,48 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["EpisodeMeasures", "steps_to_coverage", "COVERAGE_MILESTONES"]
+from mrexplore.config import SimConfig
+from mrexplore.paths.distance_field import distance_fields
+from mrexplore.types import BoolGrid
+
+__all__ = ["EpisodeMeasures", "steps_to_coverage", "lower_bound_steps", "COVERAGE_MILESTONES", "OCTILE_OVER_EUCLID"]
 
 COVERAGE_MILESTONES = (0.90, 0.95, 0.99)
+OCTILE_OVER_EUCLID = math.sqrt(4 - 2 * math.sqrt(2))
+"""Largest ratio of the octile (8-connected) length of a straight segment to its Euclidean length."""
+
+
+def lower_bound_steps(
+    passable: BoolGrid, explorable: BoolGrid, starts_rc: NDArray[np.integer], resolution_m: float, sim: SimConfig
+) -> int:
+    """Steps no planner can beat: over explorable free cells, the largest of the smallest (over robots)
+    geodesic distance from the starts, less what the sensor reaches, at ``step_m`` per step.
+
+    A cell is seen from a viewpoint within ``range_m`` in a straight free line, whose 8-connected length is
+    at most ``range_m`` x :data:`OCTILE_OVER_EUCLID`; so some robot drives at least the geodesic distance
+    less that much. Cells seen from the starts count 0.
+
+    Examples
+    --------
+    >>> corridor = np.ones((1, 200), bool)
+    >>> lower_bound_steps(corridor, corridor, np.array([[0, 0]]), 0.05, SimConfig(robots=1))  # 9.95 - 6.49 m
+    35
+    """
+    fields = distance_fields(passable, np.asarray(starts_rc))
+    nearest = np.minimum.reduce(fields)
+    cells = nearest[explorable & passable]
+    cells = cells[np.isfinite(cells)]
+    if len(cells) == 0:
+        return 0
+    far_m = float(cells.max()) * resolution_m - sim.sensor.range_m * OCTILE_OVER_EUCLID
+    return max(0, math.ceil(far_m / sim.motion.step_m - 1e-9))
 
 
 def steps_to_coverage(curve: NDArray[np.float64], level: float) -> int | None:
@@ -64,6 +97,8 @@ class EpisodeMeasures:
     reconstruction_iou_min: float = 1.0
     """Smallest free-space IoU, over rounds, of the centre's rebuilt grid against the robots' own beliefs."""
     reconstruction_iou_mean: float = 1.0
+    lower_bound_steps: int = 0
+    """Steps no planner could beat from these starts (see :func:`lower_bound_steps`)."""
 
     @classmethod
     def from_run(
@@ -75,6 +110,7 @@ class EpisodeMeasures:
         wall_s: float,
         done_reason: str,
         transmission: dict[str, Any] | None = None,
+        lower_bound: int = 0,
     ) -> EpisodeMeasures:
         """Measures of a finished run; ``transmission`` holds the byte and IoU fields (see
         :meth:`~mrexplore.preprocessing.transmission.TransmissionTotals.as_measures`)."""
@@ -96,6 +132,7 @@ class EpisodeMeasures:
             wall_s=round(wall_s, 3),
             done_reason=done_reason,
             **(transmission or {}),
+            lower_bound_steps=lower_bound,
         )
 
     def to_dict(self) -> dict[str, Any]:

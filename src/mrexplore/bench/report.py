@@ -1,0 +1,249 @@
+"""The benchmark report: Table I (coverage, steps), Table II (bytes sent), bounds, collaboration, plots."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from mrexplore.bench.runner import parse_curve, read_rows
+
+__all__ = [
+    "write_report",
+    "steps_table",
+    "bytes_table",
+    "bound_table",
+    "collaboration_table",
+    "per_map_table",
+    "YARDSTICKS",
+]
+
+CLASSES = ("small", "middle", "large")
+YARDSTICKS = frozenset({"oracle"})
+"""Strategies that know the map: shown, but never the "best other strategy" of an improvement."""
+Row = dict[str, str]
+
+
+def _classes(rows: list[Row]) -> list[str]:
+    return [c for c in CLASSES if any(r["size_class"] == c for r in rows)]
+
+
+def _mean_std(values: list[float]) -> str:
+    a = np.asarray(values, dtype=np.float64)
+    return f"{a.mean():.1f} ± {a.std():.1f}" if len(a) else "–"
+
+
+def _steps(rows: list[Row], strategy: str, cls: str) -> list[float]:
+    return [float(r["steps"]) for r in rows if r["strategy"] == strategy and r["size_class"] == cls]
+
+
+def steps_table(rows: list[Row], strategies: Sequence[str]) -> str:
+    """Table I: per size class and strategy, coverage %, steps mean ± std, and the improvement in mean
+    steps over the best other (non-yardstick) strategy, in % (positive: fewer steps)."""
+    classes = _classes(rows)
+    head = "| strategy | " + " | ".join(f"{c} cov. % | {c} steps | {c} impr. %" for c in classes) + " |"
+    lines = [head, "|" + " --- |" * (1 + 3 * len(classes))]
+    for s in strategies:
+        cells = []
+        for c in classes:
+            sel = [r for r in rows if r["strategy"] == s and r["size_class"] == c]
+            cov = [100 * float(r["coverage"]) for r in sel]
+            others = [np.mean(_steps(rows, o, c)) for o in strategies if o != s and o not in YARDSTICKS]
+            others = [v for v in others if np.isfinite(v)]
+            mine = np.mean(_steps(rows, s, c)) if sel else np.nan
+            impr = f"{100 * (min(others) - mine) / min(others):+.1f}" if others and sel else "–"
+            cells += [f"{np.mean(cov):.2f}" if cov else "–", _mean_std(_steps(rows, s, c)), impr]
+        lines.append(f"| {s} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _groups(rows: list[Row]) -> list[tuple[str, str]]:
+    keys = {(r["dataset"], r["size_class"]) for r in rows}
+    return sorted(keys, key=lambda k: (k[0], CLASSES.index(k[1]) if k[1] in CLASSES else 9))
+
+
+def bytes_table(rows: list[Row]) -> str:
+    """Table II: per dataset and size class, mean kB sent per episode by each encoding, the reduction
+    against the raw grid, and the centre map's free-space IoU (lowest round, mean over rounds)."""
+    lines = [
+        "| scene | episodes | grid kB | grid zlib kB | sparse kB | sparse delta kB | sparse vs grid | "
+        "delta vs grid | delta vs zlib | IoU min | IoU mean |",
+        "|" + " --- |" * 11,
+    ]
+    for dataset, cls in _groups(rows):
+        sel = [r for r in rows if r["dataset"] == dataset and r["size_class"] == cls]
+        kb = {k: float(np.mean([float(r[k]) for r in sel])) / 1e3 for k in _BYTES}
+        iou_min = min(float(r["reconstruction_iou_min"]) for r in sel)
+        iou_mean = np.mean([float(r["reconstruction_iou_mean"]) for r in sel])
+        lines.append(
+            f"| {dataset} {cls} | {len(sel)} | {kb['bytes_grid']:.1f} | {kb['bytes_grid_zlib']:.1f} | "
+            f"{kb['bytes_sparse']:.1f} | {kb['bytes_sparse_delta']:.1f} | "
+            f"{_reduction(kb['bytes_sparse'], kb['bytes_grid'])} | "
+            f"{_reduction(kb['bytes_sparse_delta'], kb['bytes_grid'])} | "
+            f"{_reduction(kb['bytes_sparse_delta'], kb['bytes_grid_zlib'])} | {iou_min:.4f} | {iou_mean:.5f} |"
+        )
+    return "\n".join(lines)
+
+
+_BYTES = ("bytes_grid", "bytes_grid_zlib", "bytes_sparse", "bytes_sparse_delta")
+
+
+def _reduction(part: float, whole: float) -> str:
+    return f"{100 * (1 - part / whole):.1f}% ↓" if whole > 0 else "–"
+
+
+def bound_table(rows: list[Row], strategies: Sequence[str]) -> str:
+    """Steps over ``lower_bound_steps`` (mean ratio per size class, episodes with a positive bound)."""
+    classes = _classes(rows)
+    lines = ["| strategy | " + " | ".join(classes) + " |", "|" + " --- |" * (1 + len(classes))]
+    for s in strategies:
+        cells = []
+        for c in classes:
+            ratios = [
+                float(r["steps"]) / float(r["lower_bound_steps"])
+                for r in rows
+                if r["strategy"] == s and r["size_class"] == c and float(r["lower_bound_steps"]) > 0
+            ]
+            cells.append(f"{np.mean(ratios):.2f}×" if ratios else "–")
+        lines.append(f"| {s} | " + " | ".join(cells) + " |")
+    bounds = [float(r["lower_bound_steps"]) for r in rows]
+    note = f"\n\nlower_bound_steps over episodes: mean {np.mean(bounds):.0f}, max {max(bounds):.0f}." if bounds else ""
+    return "\n".join(lines) + note
+
+
+def collaboration_table(rows: list[Row], strategies: Sequence[str]) -> str:
+    """Per strategy: overlap (sum of robot coverages less team coverage), longest and total driven path."""
+    lines = ["| strategy | overlap | longest path m | team path m | decisions | plan ms mean |", "|" + " --- |" * 6]
+    for s in strategies:
+        sel = [r for r in rows if r["strategy"] == s]
+        if not sel:
+            continue
+        mean = {k: np.mean([float(r[k]) for r in sel]) for k in _COLLAB}
+        lines.append(
+            f"| {s} | {mean['overlap']:.2f} | {mean['path_len_max_m']:.1f} | {mean['path_len_sum_m']:.1f} | "
+            f"{mean['decisions']:.0f} | {mean['plan_ms_mean']:.1f} |"
+        )
+    return "\n".join(lines)
+
+
+_COLLAB = ("overlap", "path_len_max_m", "path_len_sum_m", "decisions", "plan_ms_mean")
+
+
+def per_map_table(rows: list[Row], strategies: Sequence[str]) -> str:
+    """Steps (mean over seeds) and the lowest coverage per map and strategy."""
+    maps = sorted(
+        {(r["size_class"], r["dataset"], r["map"]) for r in rows},
+        key=lambda t: (CLASSES.index(t[0]) if t[0] in CLASSES else 9, t[1], t[2]),
+    )
+    head = "| map | dataset | class | bound | " + " | ".join(strategies) + " |"
+    lines = [head, "|" + " --- |" * (4 + len(strategies))]
+    for cls, dataset, m in maps:
+        cells = []
+        here = [r for r in rows if r["map"] == m and r["dataset"] == dataset]
+        for s in strategies:
+            sel = [r for r in here if r["strategy"] == s]
+            if not sel:
+                cells.append("–")
+                continue
+            steps = np.mean([float(r["steps"]) for r in sel])
+            cov = min(100 * float(r["coverage"]) for r in sel)
+            cells.append(f"{steps:.0f} ({cov:.1f}%)")
+        bound = np.mean([float(r["lower_bound_steps"]) for r in here])
+        lines.append(f"| {m[:16]} | {dataset} | {cls} | {bound:.0f} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _count(rows: list[Row], strategy: str) -> dict[str, int]:
+    out: dict[str, int] = {}
+    for r in rows:
+        if r["strategy"] == strategy:
+            out[r["done_reason"]] = out.get(r["done_reason"], 0) + 1
+    return out
+
+
+def write_plots(rows: list[Row], strategies: Sequence[str], out_dir: Path) -> list[str]:
+    """``coverage.png`` (mean coverage against steps per strategy, one panel per size class) and
+    ``steps.png`` (mean steps per size class and strategy, std as error bars). Returns the file names
+    written; none where matplotlib is missing."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return []
+    classes = _classes(rows)
+    if not classes:
+        return []
+    fig, axes = plt.subplots(1, len(classes), figsize=(4.5 * len(classes), 3.6), squeeze=False)
+    for ax, c in zip(axes[0], classes, strict=True):
+        for s in strategies:
+            curves = [parse_curve(r["coverage_curve"]) for r in rows if r["strategy"] == s and r["size_class"] == c]
+            if not curves:
+                continue
+            end = max(int(steps[-1]) for steps, _ in curves)
+            grid = np.linspace(0, end, 200)
+            # A finished episode keeps its final coverage until the longest one ends.
+            mean = np.mean([np.interp(grid, steps, cov) for steps, cov in curves], axis=0)
+            ax.plot(grid, 100 * mean, label=s)
+        ax.set_title(f"{c} scenes")
+        ax.set_xlabel("steps")
+        ax.set_ylabel("coverage %")
+        ax.grid(alpha=0.3)
+    axes[0][0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out_dir / "coverage.png", dpi=110)
+    plt.close(fig)
+    fig, ax = plt.subplots(figsize=(max(4.5, 1.6 + 1.4 * len(classes) * len(strategies) / 3), 3.6))
+    width = 0.8 / max(1, len(strategies))
+    for k, s in enumerate(strategies):
+        means = [float(np.mean(_steps(rows, s, c))) if _steps(rows, s, c) else 0.0 for c in classes]
+        stds = [float(np.std(_steps(rows, s, c))) if _steps(rows, s, c) else 0.0 for c in classes]
+        ax.bar(np.arange(len(classes)) + k * width, means, width, yerr=stds, capsize=2, label=s)
+    ax.set_xticks(np.arange(len(classes)) + width * (len(strategies) - 1) / 2, classes)
+    ax.set_ylabel("steps (mean ± std)")
+    ax.legend(fontsize=8)
+    ax.grid(axis="y", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out_dir / "steps.png", dpi=110)
+    plt.close(fig)
+    return ["coverage.png", "steps.png"]
+
+
+def write_report(results_csv: Path, report_md: Path, strategies: Sequence[str], command: str) -> None:
+    """Write the markdown report of a results CSV, with plots beside it and the command that made it."""
+    rows = [r for r in read_rows(results_csv) if r["strategy"] in strategies]
+    n_maps = len({r["map_path"] for r in rows})
+    seeds = sorted({int(r["seed"]) for r in rows})
+    plots = write_plots(rows, strategies, report_md.parent)
+    pictures = [f"![{p}]({p})" for p in plots] or ["(plots need matplotlib: pip install 'mrexplore[plot]')"]
+    text = "\n\n".join(
+        [
+            "# Benchmark report",
+            f"Made by: `{command}`",
+            f"{len(rows)} episodes: {n_maps} maps, strategies {', '.join(strategies)}, seeds {seeds}. "
+            "Size classes by explorable free area: small < 100 m², middle 100-300 m², large > 300 m². "
+            "Steps: mean ± std over maps and seeds; coverage: mean; improvement: against the best other "
+            f"strategy's mean steps in the class (yardsticks {', '.join(sorted(YARDSTICKS))} excluded).",
+            "## Table I: coverage and steps by size class",
+            steps_table(rows, strategies),
+            *pictures,
+            "## Table II: bytes sent per episode, robots to centre",
+            "Grid: each robot's int8 occupancy grid over its known bounding box every round (the paper's "
+            "baseline); sparse: the frontier maps of IV-A; delta: changes since the last acknowledged map. "
+            "IoU: free space of the centre's rebuilt map against the union of the robots' own grids.",
+            bytes_table(rows),
+            "## Steps against lower_bound_steps",
+            bound_table(rows, strategies),
+            "## Collaboration",
+            collaboration_table(rows, strategies),
+            "## Steps per map (mean over seeds; lowest coverage in brackets)",
+            per_map_table(rows, strategies),
+            "## Ends",
+            "\n".join(
+                f"- {s}: " + ", ".join(f"{k} {v}" for k, v in sorted(_count(rows, s).items())) for s in strategies
+            ),
+        ]
+    )
+    report_md.write_text(text + "\n")
