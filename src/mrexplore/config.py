@@ -21,6 +21,7 @@ __all__ = [
     "PreprocessConfig",
     "GlobalPlanningConfig",
     "LocalPlanningConfig",
+    "CoScanConfig",
     "MissionConfig",
     "config_to_dict",
 ]
@@ -171,6 +172,26 @@ class GlobalPlanningConfig:
         _require(self.size_weight >= 0, "size_weight", ">= 0", self.size_weight)
         if self.commitment is not None:
             _require(0 <= self.commitment <= 1, "commitment", "in [0, 1] or None", self.commitment)
+
+
+@dataclass(frozen=True)
+class CoScanConfig:
+    """The CoScan-2D baseline (Dong et al. 2019): task sampling and geodesic Lloyd clustering."""
+
+    task_spacing_m: float = 0.5
+    """Frontier tasks are at least this far apart, metres, > 0."""
+    tasks_per_robot: int = 6
+    """At most this many tasks per robot; the farthest are dropped first, >= 1."""
+    delta_m: float = 2.0
+    """A cluster reaching farther than this from its centroid is split; singletons this close merge, metres, > 0."""
+    max_iterations: int = 10
+    """Lloyd iterations at most, >= 1."""
+
+    def __post_init__(self) -> None:
+        _require(self.task_spacing_m > 0, "task_spacing_m", "> 0 metres", self.task_spacing_m)
+        _require(self.tasks_per_robot >= 1, "tasks_per_robot", ">= 1", self.tasks_per_robot)
+        _require(self.delta_m > 0, "delta_m", "> 0 metres", self.delta_m)
+        _require(self.max_iterations >= 1, "max_iterations", ">= 1", self.max_iterations)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,191 @@
+"""CoScan-2D (Dong et al., SIGGRAPH 2019) on the grid: frontier tasks, robot-seeded geodesic Lloyd
+clustering with split and merge, Hungarian assignment, and a 2-opt tour per robot.
+
+Pure functions on distance matrices; the pipeline that feeds them is ``strategies.CoScanPipeline``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["sample_tasks", "cap_tasks", "lloyd_clusters", "LloydResult", "two_opt_tour", "tour_length"]
+
+
+def sample_tasks(frontier_rc: NDArray[np.integer], spacing_cells: float) -> NDArray[np.int32]:
+    """Frontier cells at least ``spacing_cells`` apart: greedy over the cells in the given order, a cell
+    is kept when no kept cell lies within the spacing (buckets of the spacing's size make it linear).
+
+    Examples
+    --------
+    >>> sample_tasks(np.array([[0, c] for c in range(12)]), 5).tolist()
+    [[0, 0], [0, 5], [0, 10]]
+    """
+    pts = np.asarray(frontier_rc, dtype=np.int64)
+    kept: list[tuple[int, int]] = []
+    buckets: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    s = max(float(spacing_cells), 1e-9)
+    s2 = spacing_cells * spacing_cells
+    for r, c in pts:
+        br, bc = int(r // s), int(c // s)
+        near = (
+            q
+            for dr in (-1, 0, 1)
+            for dc in (-1, 0, 1)
+            for q in buckets.get((br + dr, bc + dc), ())
+            if (q[0] - r) ** 2 + (q[1] - c) ** 2 < s2
+        )
+        if next(near, None) is None:
+            kept.append((int(r), int(c)))
+            buckets.setdefault((br, bc), []).append((int(r), int(c)))
+    return np.array(kept, dtype=np.int32).reshape(-1, 2)
+
+
+def cap_tasks(nearest_robot_dist: NDArray[np.floating], max_tasks: int) -> NDArray[np.int64]:
+    """Indices of the tasks kept: reachable ones, at most ``max_tasks``, the farthest dropped first.
+
+    Examples
+    --------
+    >>> cap_tasks(np.array([5.0, np.inf, 1.0, 3.0]), 2).tolist()
+    [2, 3]
+    """
+    d = np.asarray(nearest_robot_dist, dtype=np.float64)
+    order = np.argsort(d, kind="stable")
+    order = order[np.isfinite(d[order])][:max_tasks]
+    return np.sort(order)
+
+
+@dataclass(frozen=True)
+class LloydResult:
+    """Task clusters: ``labels`` ``(m,) int64`` cluster per task, ``centroids`` ``(k,) int64`` the task each
+    cluster's centroid was snapped to, and the iterations run."""
+
+    labels: NDArray[np.int64]
+    centroids: NDArray[np.int64]
+    iterations: int
+
+
+def _snap(members: NDArray[np.int64], task_rc: NDArray[np.floating]) -> int:
+    mean = task_rc[members].mean(axis=0)
+    return int(members[np.argmin(((task_rc[members] - mean) ** 2).sum(axis=1))])
+
+
+def lloyd_clusters(
+    task_rc: NDArray[np.integer],
+    d_tasks: NDArray[np.floating],
+    d_robots: NDArray[np.floating],
+    delta_cells: float,
+    max_iterations: int = 10,
+) -> LloydResult:
+    """CoScan's robot-seeded Lloyd clustering with geodesic distances.
+
+    The first centroids are the robots. Each iteration assigns every task to its geodesically nearest
+    centroid, moves each centroid to its members' mean snapped to the nearest member (a frontier cell,
+    so in free space), splits a cluster whose farthest member is more than ``delta_cells`` from its
+    centroid (the farthest member seeds the new cluster), and, while clusters outnumber robots, merges
+    a singleton into the cluster whose centroid is within ``delta_cells`` of it. It stops when the
+    centroids no longer change, or after ``max_iterations``.
+
+    Parameters
+    ----------
+    task_rc:
+        ``(m, 2)`` task cells.
+    d_tasks:
+        ``(m, m)`` geodesic distances between tasks, cells.
+    d_robots:
+        ``(n, m)`` geodesic distances robot -> task, cells (finite for every task).
+    """
+    pts = np.asarray(task_rc, dtype=np.float64)
+    n_robots, m = d_robots.shape
+    if m == 0:
+        return LloydResult(np.zeros(0, np.int64), np.zeros(0, np.int64), 0)
+    centroid_dist = np.asarray(d_robots, dtype=np.float64)  # (k, m): rows are centroids
+    centroids: list[int] | None = None
+    iterations = 0
+    for _ in range(max_iterations):
+        iterations += 1
+        labels = np.argmin(centroid_dist, axis=0)
+        groups = [np.flatnonzero(labels == k) for k in range(len(centroid_dist))]
+        new = [_snap(g, pts) for g in groups if len(g)]
+        groups = [g for g in groups if len(g)]
+        # Split: a cluster reaching farther than delta from its centroid gives its farthest task away.
+        for c, g in zip(list(new), groups, strict=True):
+            far = g[np.argmax(d_tasks[c, g])]
+            if d_tasks[c, far] > delta_cells:
+                new.append(int(far))
+        # Merge: while clusters outnumber robots, a singleton within delta of another centroid joins it.
+        sizes = {c: len(g) for c, g in zip(new, groups, strict=False)}
+        for c in list(new):
+            if len(new) <= n_robots:
+                break
+            if sizes.get(c, 0) == 1 and any(d_tasks[c, o] <= delta_cells for o in new if o != c):
+                new.remove(c)
+        new = sorted(set(new))
+        if centroids is not None and new == centroids:
+            break
+        centroids = new
+        centroid_dist = d_tasks[np.asarray(centroids)]
+    assert centroids is not None
+    labels = np.argmin(d_tasks[np.asarray(centroids)], axis=0)
+    used = np.unique(labels)
+    remap = np.full(len(centroids), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    return LloydResult(remap[labels].astype(np.int64), np.asarray(centroids, np.int64)[used], iterations)
+
+
+def tour_length(order: NDArray[np.integer], d_start: NDArray[np.floating], d: NDArray[np.floating]) -> float:
+    """Length of the open tour robot -> order[0] -> order[1] -> ..."""
+    if len(order) == 0:
+        return 0.0
+    o = np.asarray(order)
+    return float(d_start[o[0]] + d[o[:-1], o[1:]].sum())
+
+
+def two_opt_tour(d_start: NDArray[np.floating], d: NDArray[np.floating]) -> NDArray[np.int64]:
+    """Order of visiting ``m`` tasks from the robot: nearest neighbour, then 2-opt (reverse the span that
+    shortens the open tour most) until no reversal shortens it.
+
+    Parameters
+    ----------
+    d_start:
+        ``(m,)`` distances robot -> task.
+    d:
+        ``(m, m)`` distances task -> task.
+
+    Examples
+    --------
+    >>> x = np.array([1.0, 2.0, 3.0, 4.0])  # tasks on a line, the robot at 0
+    >>> d = np.abs(x[:, None] - x[None, :])
+    >>> two_opt_tour(x, d).tolist()
+    [0, 1, 2, 3]
+    """
+    m = len(d_start)
+    if m == 0:
+        return np.zeros(0, dtype=np.int64)
+    left = set(range(m))
+    order = [int(np.argmin(d_start))]
+    left.remove(order[0])
+    while left:
+        last = order[-1]
+        nxt = min(left, key=lambda j: (d[last, j], j))
+        order.append(nxt)
+        left.remove(nxt)
+    best = tour_length(np.array(order), d_start, d)
+    improved = True
+    while improved:
+        improved = False
+        gain_best, span = 1e-9, None
+        for i in range(m - 1):
+            for j in range(i + 1, m):
+                cand = order[:i] + order[i : j + 1][::-1] + order[j + 1 :]
+                gain = best - tour_length(np.array(cand), d_start, d)
+                if gain > gain_best:
+                    gain_best, span = gain, (i, j)
+        if span is not None:
+            i, j = span
+            order = order[:i] + order[i : j + 1][::-1] + order[j + 1 :]
+            best -= gain_best
+            improved = True
+    return np.array(order, dtype=np.int64)
