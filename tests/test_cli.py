@@ -80,7 +80,10 @@ def test_given_starts(capsys) -> None:
             ["--map", "missing.yaml"],
             "mrexplore: error: map file not found: missing.yaml; pass an existing map file with --map",
         ),
-        (["--strategy", "greedy"], "mrexplore: error: unknown strategy 'greedy'; choose one of hier, nearest, utility, coscan"),
+        (
+            ["--strategy", "greedy"],
+            "mrexplore: error: unknown strategy 'greedy'; choose one of hier, nearest, utility, coscan, oracle",
+        ),
         (
             ["--start", "0.01,0.01"],
             "mrexplore: error: start (0.01, 0.01) lies inside a wall; give --start X,Y on free space",

@@ -86,6 +86,7 @@ def run_mission(
     if len(starts_rc) != sim_cfg.robots:
         raise MrExploreError(f"starts must give one cell per robot ({sim_cfg.robots}), got {len(starts_rc)}")
     t0 = time.perf_counter()
+    strategy.prepare(truth, starts_rc, sim_cfg)
     sim = ExplorationSim(truth, starts_rc, sim_cfg, rng)
     n = sim.n_robots
     goals = np.tile(NO_GOAL, (n, 1))
@@ -104,12 +105,15 @@ def run_mission(
     no_route = np.zeros((0, 2), dtype=np.int32)
     routes = [no_route] * n  # targets after the current goal
     passable = state == CellState.FREE
+    frontier_goals = strategy.goals_are_frontiers
 
     def advance(i: int) -> bool:
         """Move robot i on to the next target of its route; False when the route is used up."""
         while len(routes[i]):
             target, routes[i] = routes[i][0], routes[i][1:]
-            if blacklist[target[0], target[1]] or not _goal_still_frontier(sim.team_observed, target):
+            if frontier_goals and (
+                blacklist[target[0], target[1]] or not _goal_still_frontier(sim.team_observed, target)
+            ):
                 continue
             path = astar_path(passable, tuple(sim.positions_rc[i]), tuple(target))
             if len(path):
@@ -128,12 +132,13 @@ def run_mission(
                 continue
             reached = sim.at_path_end(i)
             if (
-                reached
+                frontier_goals
+                and reached
                 and np.array_equal(sim.positions_rc[i], goals[i])
                 and _goal_still_frontier(sim.team_observed, goals[i])
             ):
                 blacklist[goals[i, 0], goals[i, 1]] = True  # stood on it and it stayed a frontier
-            resolved = reached or not _goal_still_frontier(sim.team_observed, goals[i])
+            resolved = reached or (frontier_goals and not _goal_still_frontier(sim.team_observed, goals[i]))
             if blocked[i] or sim.path_ahead_blocked(i) or (resolved and not advance(i)):
                 need = True
         if need:
@@ -142,8 +147,10 @@ def run_mission(
             # Only goals still ahead and still bordering unknown space may hold their robot (hysteresis).
             current = [
                 np.vstack([goals[i : i + 1], routes[i]])
-                if goals[i, 0] >= 0 and not sim.at_path_end(i) and _goal_still_frontier(sim.team_observed, goals[i])
-                else no_route
+                if goals[i, 0] >= 0
+                and not sim.at_path_end(i)
+                and (not frontier_goals or _goal_still_frontier(sim.team_observed, goals[i]))
+                else (no_route if frontier_goals else routes[i])
                 for i in range(n)
             ]
             decision = strategy.decide(state, sim.positions_rc.copy(), truth.resolution_m, blacklist, current)

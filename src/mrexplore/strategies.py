@@ -9,12 +9,14 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
-from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig
+from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig, SimConfig
 from mrexplore.global_planning.classical import NearestPlanner, UtilityPlanner
 from mrexplore.global_planning.coscan import cap_tasks, lloyd_clusters, sample_tasks, two_opt_tour
 from mrexplore.global_planning.hungarian import match_min_cost
+from mrexplore.global_planning.oracle import plan_oracle_routes
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem, GlobalPlanner
 from mrexplore.local_planning.router import LocalRouter
+from mrexplore.maps.ground_truth import GroundTruthMap, explorable_region
 from mrexplore.paths.distance_field import descend_path, distance_fields, distances_at
 from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers
 from mrexplore.preprocessing.frontiers import Frontiers, detect_frontiers
@@ -75,6 +77,12 @@ class ExplorationPipeline:
     local: LocalRouter | None = None
     commitment: float = 1.0
     """Goal hysteresis in [0, 1] (see :class:`~mrexplore.config.GlobalPlanningConfig`); 1: none."""
+    goals_are_frontiers: bool = True
+    """Goals are frontier cells: a goal that stops bordering unknown space is resolved (False for the
+    oracle, whose goals are viewpoints)."""
+
+    def prepare(self, truth: GroundTruthMap, starts_rc: NDArray[np.integer], sim: SimConfig) -> None:
+        """Called once before a mission; only a yardstick that knows the map uses it."""
 
     def _committed(
         self,
@@ -220,6 +228,66 @@ class CoScanPipeline(ExplorationPipeline):
         return Decision(state, frontiers, clusters, assignment, goals, routes, paths, None)
 
 
+@dataclass
+class OraclePipeline(ExplorationPipeline):
+    """The full-knowledge yardstick (``oracle``): follows routes planned on the ground truth before the
+    mission (:mod:`~mrexplore.global_planning.oracle`). It still receives the robots' maps each round, so
+    its bytes are counted like any strategy's, but plans on the truth."""
+
+    viewpoint_spacing_m: float = 1.0
+    """Lattice step of the candidate viewpoints, metres."""
+    _truth_state: StateGrid | None = field(default=None, repr=False)
+    _plan: list[NDArray[np.int32]] | None = field(default=None, repr=False)
+
+    def prepare(self, truth: GroundTruthMap, starts_rc: NDArray[np.integer], sim: SimConfig) -> None:
+        explorable = explorable_region(truth.occupied, starts_rc)
+        plan = plan_oracle_routes(
+            truth.occupied,
+            explorable,
+            starts_rc,
+            sim.sensor.range_m / truth.resolution_m,
+            sim.sensor.ray_oversampling,
+            max(1, round(self.viewpoint_spacing_m / truth.resolution_m)),
+        )
+        self._plan = plan.routes
+        self._truth_state = np.where(truth.occupied, CellState.OCCUPIED, CellState.FREE).astype(np.uint8)
+
+    def decide(
+        self,
+        state: StateGrid,
+        robots_rc: NDArray[np.int32],
+        resolution_m: float,
+        blacklist: BoolGrid | None = None,
+        current: Sequence[NDArray[np.int32]] | None = None,
+    ) -> Decision:
+        if self._plan is None or self._truth_state is None:
+            raise MrExploreError("the oracle needs the ground truth: call prepare() before decide()")
+        n = len(robots_rc)
+        truth = self._truth_state
+        if current is None:
+            current = [np.zeros((0, 2), np.int32)] * n
+        # The first decision hands out the plan; later ones keep each robot on what is left of its route.
+        routes = self._plan if not any(len(c) for c in current) and self._plan is not None else list(current)
+        self._plan = [np.zeros((0, 2), np.int32)] * n
+        frontiers = detect_frontiers(state)
+        goals = np.tile(NO_GOAL, (n, 1))
+        no_path = np.zeros((0, 2), np.int32)
+        if not any(len(r) for r in routes):
+            empty = Assignment(np.full(n, UNASSIGNED, dtype=np.int64))
+            return Decision(truth, frontiers, Clusters.empty(), empty, goals, [no_path] * n, [no_path] * n, "plan_done")
+        passable = truth == CellState.FREE
+        fields = distance_fields(passable, robots_rc)
+        paths = []
+        for i, route in enumerate(routes):
+            if len(route):
+                goals[i] = route[0]
+                paths.append(descend_path(fields[i], passable, tuple(goals[i])))
+            else:
+                paths.append(no_path)
+        owner = np.array([i if len(r) else UNASSIGNED for i, r in enumerate(routes)], dtype=np.int64)
+        return Decision(truth, frontiers, Clusters.empty(), Assignment(owner), goals, list(routes), paths, None)
+
+
 CENTRE_COMMITMENT = 0.5
 """Default hysteresis of strategies whose goal is a cluster centre (measured on 6 maps x 2 seeds: utility
 561 mean steps without, 414 with 0.5)."""
@@ -248,11 +316,16 @@ def _coscan(gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningCon
     return CoScanPipeline("coscan", UtilityPlanner(gp), pp)
 
 
+def _oracle(gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig) -> ExplorationPipeline:
+    return OraclePipeline("oracle", NearestPlanner(), pp, goals_are_frontiers=False)
+
+
 STRATEGIES: dict[str, Callable[[GlobalPlanningConfig, PreprocessConfig, LocalPlanningConfig], ExplorationPipeline]] = {
     "hier": _hier,
     "nearest": _nearest,
     "utility": _utility,
     "coscan": _coscan,
+    "oracle": _oracle,
 }
 """Strategy name -> factory of its pipeline."""
 

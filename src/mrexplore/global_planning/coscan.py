@@ -11,6 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from mrexplore.global_planning.tours import open_tour
+
 __all__ = ["sample_tasks", "cap_tasks", "lloyd_clusters", "LloydResult", "two_opt_tour", "tour_length"]
 
 
@@ -145,7 +147,7 @@ def tour_length(order: NDArray[np.integer], d_start: NDArray[np.floating], d: ND
 
 def two_opt_tour(d_start: NDArray[np.floating], d: NDArray[np.floating]) -> NDArray[np.int64]:
     """Order of visiting ``m`` tasks from the robot: nearest neighbour, then 2-opt (reverse the span that
-    shortens the open tour most) until no reversal shortens it.
+    shortens the open tour most) until no reversal shortens it (:func:`~mrexplore.global_planning.tours.open_tour`).
 
     Parameters
     ----------
@@ -162,30 +164,7 @@ def two_opt_tour(d_start: NDArray[np.floating], d: NDArray[np.floating]) -> NDAr
     [0, 1, 2, 3]
     """
     m = len(d_start)
-    if m == 0:
-        return np.zeros(0, dtype=np.int64)
-    left = set(range(m))
-    order = [int(np.argmin(d_start))]
-    left.remove(order[0])
-    while left:
-        last = order[-1]
-        nxt = min(left, key=lambda j: (d[last, j], j))
-        order.append(nxt)
-        left.remove(nxt)
-    best = tour_length(np.array(order), d_start, d)
-    improved = True
-    while improved:
-        improved = False
-        gain_best, span = 1e-9, None
-        for i in range(m - 1):
-            for j in range(i + 1, m):
-                cand = order[:i] + order[i : j + 1][::-1] + order[j + 1 :]
-                gain = best - tour_length(np.array(cand), d_start, d)
-                if gain > gain_best:
-                    gain_best, span = gain, (i, j)
-        if span is not None:
-            i, j = span
-            order = order[:i] + order[i : j + 1][::-1] + order[j + 1 :]
-            best -= gain_best
-            improved = True
-    return np.array(order, dtype=np.int64)
+    full = np.zeros((m + 1, m + 1), dtype=np.float64)
+    full[0, 1:] = full[1:, 0] = d_start
+    full[1:, 1:] = d
+    return open_tour(full) - 1
