@@ -50,6 +50,8 @@ def test_rows_follow_the_schema_and_finished_episodes_are_skipped(tmp_path) -> N
     ]
     assert all(float(r["coverage"]) >= 0.99 for r in rows)
     assert run_bench(specs, out) == 0
+    assert run_bench(specs + specs, tmp_path / "twice.csv", workers=1) == 4  # a spec given twice runs once
+    assert len(read_rows(tmp_path / "twice.csv")) == 4
 
 
 def test_resume_after_kill_loses_nothing(tmp_path) -> None:
@@ -94,7 +96,7 @@ def test_expand_maps_skips_label_images_and_yaml_images(tmp_path) -> None:
     for name in ("a.png", "a_spaces.png", "b.png", "c.json"):
         Image.fromarray(img).save(tmp_path / name) if name.endswith(".png") else (tmp_path / name).write_text("{}")
     (tmp_path / "b.yaml").write_text("image: b.png\nresolution: 0.1\n")
-    got = [Path(p).name for p in expand_maps([str(tmp_path)])]
+    got = [Path(p).name for p in expand_maps([str(tmp_path), str(tmp_path / "b.yaml")])]
     assert got == ["a.png", "b.yaml", "c.json"]
     with pytest.raises(MrExploreError, match="map not found: nope; pass map files or folders with --maps"):
         expand_maps(["nope"])

@@ -213,7 +213,8 @@ def write_plots(rows: list[Row], strategies: Sequence[str], out_dir: Path) -> li
 
 def write_report(results_csv: Path, report_md: Path, strategies: Sequence[str], command: str) -> None:
     """Write the markdown report of a results CSV, with plots beside it and the command that made it."""
-    rows = [r for r in read_rows(results_csv) if r["strategy"] in strategies]
+    unique = {(r["map_path"], r["strategy"], r["robots"], r["seed"]): r for r in read_rows(results_csv)}
+    rows = [r for r in unique.values() if r["strategy"] in strategies]
     n_maps = len({r["map_path"] for r in rows})
     seeds = sorted({int(r["seed"]) for r in rows})
     plots = write_plots(rows, strategies, report_md.parent)

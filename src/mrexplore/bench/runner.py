@@ -180,9 +180,10 @@ def run_bench(
     results_csv.parent.mkdir(parents=True, exist_ok=True)
     _check_columns(results_csv)
     done = _done_keys(read_rows(results_csv))
-    todo = [s for s in specs if s.key not in done]
+    todo = list({s.key: s for s in specs if s.key not in done}.values())  # a spec given twice runs once
     show = sys.stderr.isatty() if progress is None else progress
-    bar = tqdm(total=len(specs), initial=len(specs) - len(todo), unit="ep", disable=not show)
+    total = len({s.key for s in specs})
+    bar = tqdm(total=total, initial=total - len(todo), unit="ep", disable=not show)
     workers = workers or os.cpu_count() or 1
     if ray_address is not None:
         _run_ray(todo, results_csv, workers, ray_address, bar)
@@ -248,4 +249,4 @@ def expand_maps(items: Sequence[str]) -> list[str]:
             raise MrExploreError(f"map not found: {item}; pass map files or folders with --maps")
     if not out:
         raise MrExploreError(f"no map files in {', '.join(items)}; pass map files or folders with --maps")
-    return out
+    return list(dict.fromkeys(out))  # a map named twice (a file and its folder, overlapping globs) runs once
