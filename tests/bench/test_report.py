@@ -35,7 +35,9 @@ def test_improvement_is_against_the_best_other_strategy_not_yardsticks() -> None
 def test_bytes_table_reductions() -> None:
     line = bytes_table([row("hier", 10), row("hier", 10, bytes_sparse="2000")]).splitlines()[2]
     # grid 10 kB, zlib 2 kB, sparse 3 kB mean, delta 0.5 kB: 70 % and 95 % below the grid, 75 % below zlib.
-    assert line == "| houseexpo small | 2 | 10.0 | 2.0 | 3.0 | 0.5 | 70.0% ↓ | 95.0% ↓ | 75.0% ↓ | 0.9900 | 0.99900 |"
+    assert (
+        line == "| houseexpo small | 2 | 10.0 | 2.0 | 3.0 | 0.5 | 70.00% ↓ | 95.00% ↓ | 75.00% ↓ | 0.9900 | 0.99900 |"
+    )
 
 
 def test_bound_ratio() -> None:

@@ -90,7 +90,7 @@ _BYTES = ("bytes_grid", "bytes_grid_zlib", "bytes_sparse", "bytes_sparse_delta")
 
 
 def _reduction(part: float, whole: float) -> str:
-    return f"{100 * (1 - part / whole):.1f}% ↓" if whole > 0 else "–"
+    return f"{100 * (1 - part / whole):.2f}% ↓" if whole > 0 else "–"
 
 
 def bound_table(rows: list[Row], strategies: Sequence[str]) -> str:

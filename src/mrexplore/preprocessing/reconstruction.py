@@ -17,9 +17,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrexplore.preprocessing.frontiers import close_unknown_holes
-from mrexplore.preprocessing.scanline_fill import scanline_fill
-from mrexplore.preprocessing.sparse_map import DIRECTIONS, SparseFrontierMap, apply_delta
+from mrexplore.preprocessing.scanline_fill import mark_coded_cells, scanline_fill
+from mrexplore.preprocessing.sparse_map import SparseFrontierMap, apply_delta
 from mrexplore.types import BoolGrid, CellState, GridRC, MrExploreError, StateGrid
+
+_NO_FENCE = np.zeros((0, 0), dtype=bool)
 
 __all__ = ["fill_free", "fill_paper", "reconstruct", "merge_reconstructions", "CentreMap", "free_iou"]
 
@@ -63,28 +65,38 @@ def fill_paper(boundary: BoolGrid, seed_rc: GridRC) -> BoolGrid:
     return filled | boundary
 
 
-def reconstruct(codes: NDArray[np.uint8], seeds: NDArray[np.int64]) -> StateGrid:
-    """``(H, W) uint8`` one robot's grid: filled free space, the coded neighbours as unknown or occupied,
-    the rest unknown."""
-    H, W = codes.shape
-    state = np.full((H, W), CellState.UNKNOWN, dtype=np.uint8)
-    occupied = np.zeros((H + 2, W + 2), dtype=bool)
-    for d, (dr, dc) in enumerate(DIRECTIONS):
-        occupied[1 + dr : 1 + dr + H, 1 + dc : 1 + dc + W] |= ((codes >> (4 + d)) & 1).astype(bool)
-    state[occupied[1:-1, 1:-1]] = CellState.OCCUPIED
-    state[fill_free(codes, seeds)] = CellState.FREE
+def _rebuild_into(
+    codes: NDArray[np.uint8], cells: NDArray[np.int64], seeds: NDArray[np.int64], free: BoolGrid, occupied: BoolGrid
+) -> None:
+    filled = np.zeros(codes.shape, dtype=bool)
+    scanline_fill(codes, np.asarray(seeds, dtype=np.int64), _NO_FENCE, filled)
+    free |= filled
+    mark_coded_cells(codes, cells, free, occupied)
+
+
+def _state_of(free: BoolGrid, occupied: BoolGrid) -> StateGrid:
+    state = np.full(free.shape, CellState.UNKNOWN, dtype=np.uint8)
+    state[occupied] = CellState.OCCUPIED
+    state[free & ~occupied] = CellState.FREE
     return state
 
 
+def reconstruct(codes: NDArray[np.uint8], seeds: NDArray[np.int64]) -> StateGrid:
+    """``(H, W) uint8`` one robot's grid: filled free space, the coded neighbours as unknown or occupied,
+    the rest unknown."""
+    free = np.zeros(codes.shape, dtype=bool)
+    occupied = np.zeros(codes.shape, dtype=bool)
+    _rebuild_into(codes, np.flatnonzero(codes.ravel()).astype(np.int64), seeds, free, occupied)
+    return _state_of(free, occupied)
+
+
 def merge_reconstructions(states: list[StateGrid], closing_size_cells: int) -> StateGrid:
-    """The centre's grid: free where some robot has free space and none an obstacle, occupied where some
-    robot has an obstacle, then closed (paper IV-A: noise removed by closing after reconstruction)."""
+    """The centre's grid from robots' grids: free where some robot has free space and none an obstacle,
+    occupied where some robot has an obstacle, then closed (paper IV-A: noise removed by closing after
+    reconstruction)."""
     free = np.logical_or.reduce([s == CellState.FREE for s in states])
     occupied = np.logical_or.reduce([s == CellState.OCCUPIED for s in states])
-    merged = np.full(states[0].shape, CellState.UNKNOWN, dtype=np.uint8)
-    merged[free] = CellState.FREE
-    merged[occupied] = CellState.OCCUPIED
-    return close_unknown_holes(merged, closing_size_cells)
+    return close_unknown_holes(_state_of(free, occupied), closing_size_cells)
 
 
 class CentreMap:
@@ -108,6 +120,7 @@ class CentreMap:
         self.closing_size_cells = closing_size_cells
         self._codes = [np.zeros(shape, dtype=np.uint8) for _ in range(n_robots)]
         self._seeds = [np.zeros(0, dtype=np.int64) for _ in range(n_robots)]
+        self._cells = [np.zeros(0, dtype=np.int64) for _ in range(n_robots)]
         self._round = [_NOT_HEARD] * n_robots
         self._known = [False] * n_robots
 
@@ -126,8 +139,11 @@ class CentreMap:
                     f"{self._round[i]}; ask the robot for a full map"
                 )
             apply_delta(self._codes[i], message)
+            gone = message.cells[message.codes == 0]
+            self._cells[i] = np.union1d(np.setdiff1d(self._cells[i], gone), message.cells[message.codes != 0])
         else:
             self._codes[i] = message.code_grid()
+            self._cells[i] = message.cells.copy()
         self._seeds[i] = message.seeds
         self._round[i] = message.round
         self._known[i] = True
@@ -137,11 +153,13 @@ class CentreMap:
         return reconstruct(self._codes[robot], self._seeds[robot])
 
     def state(self) -> StateGrid:
-        """The merged, closed grid the planners run on."""
-        states = [self.robot_state(i) for i in range(len(self._codes)) if self._known[i]]
-        if not states:
-            return np.full(self.shape, CellState.UNKNOWN, dtype=np.uint8)
-        return merge_reconstructions(states, self.closing_size_cells)
+        """The merged, closed grid the planners run on (the rule of :func:`merge_reconstructions`)."""
+        free = np.zeros(self.shape, dtype=bool)
+        occupied = np.zeros(self.shape, dtype=bool)
+        for i in range(len(self._codes)):
+            if self._known[i]:  # each robot's fill in one shared pair of masks, touching only its cells
+                _rebuild_into(self._codes[i], self._cells[i], self._seeds[i], free, occupied)
+        return close_unknown_holes(_state_of(free, occupied), self.closing_size_cells)
 
 
 def free_iou(a: BoolGrid, b: BoolGrid) -> float:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-__all__ = ["scanline_fill", "pick_seeds", "neighbour_codes_kernel"]
+__all__ = ["scanline_fill", "pick_seeds", "neighbour_codes_kernel", "mark_coded_cells"]
 
 _UP, _DOWN, _LEFT, _RIGHT = 0, 1, 2, 3
 _FREE, _OCCUPIED, _UNKNOWN = 0, 1, 2  # CellState values
@@ -124,3 +124,23 @@ def neighbour_codes_kernel(state: np.ndarray) -> np.ndarray:  # pragma: no cover
                     code |= 1 << (4 + d)
             codes[r, c] = code
     return codes
+
+
+@nb.njit(cache=True)
+def mark_coded_cells(
+    codes: np.ndarray, cells: np.ndarray, free: np.ndarray, occupied: np.ndarray
+) -> None:  # pragma: no cover - numba
+    """Mark the listed boundary cells free and the neighbours their codes call occupied (sparse: touches
+    only the listed cells and their neighbours)."""
+    H, W = codes.shape
+    for k in range(len(cells)):
+        r = cells[k] // W
+        c = cells[k] % W
+        free[r, c] = True
+        code = codes[r, c]
+        for d in range(4):
+            rr = r + _DR[d]
+            cc = c + _DC[d]
+            # A code from the wire may flag a side beyond the grid: numba does not check bounds, so we do.
+            if (code >> (4 + d)) & 1 and 0 <= rr < H and 0 <= cc < W:
+                occupied[rr, cc] = True

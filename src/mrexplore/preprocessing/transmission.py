@@ -11,6 +11,7 @@ union of the robots' own beliefs.
 
 from __future__ import annotations
 
+import time
 import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -141,12 +142,18 @@ class TeamLink:
         self.centre = CentreMap(n_robots, shape, preprocess.closing_size_cells)
         self.totals = TransmissionTotals()
         self.senders = [RobotSender(i, shape) for i in range(n_robots)]
+        self.robot_ms = 0.0
+        """Milliseconds the last round spent on the robots' side (their closing and encoding, which run on
+        the robots in a real team, and the byte accounting), as opposed to the centre's decoding and
+        rebuilding."""
 
     def exchange(self, beliefs: Sequence[Belief], positions_rc: NDArray[np.integer]) -> StateGrid:
         """Run one round: every robot sends, the centre rebuilds; returns the centre's ``(H, W) uint8`` grid."""
         r = self.totals.rounds
         team_free = np.zeros(self.centre.shape, dtype=bool)
+        robot_s = 0.0
         for i, belief in enumerate(beliefs):
+            t0 = time.perf_counter()
             own = belief.state(self.sensor)
             team_free |= own == CellState.FREE
             closed = close_unknown_holes(own, self.preprocess.closing_size_cells)
@@ -158,10 +165,13 @@ class TeamLink:
             self.totals.bytes_sparse += len(full_bytes)
             self.totals.bytes_sparse_delta += len(delta_bytes)
             sent = delta_bytes if self.mode == "delta" else full_bytes
+            robot_s += time.perf_counter() - t0
             self.centre.receive(decode(sent))
             # The simulated link is reliable: the centre acknowledges every message at once.
             self.senders[i].acknowledged(sent)
         state = self.centre.state()
+        t0 = time.perf_counter()
         self.totals.iou.append(free_iou(state == CellState.FREE, team_free))
+        self.robot_ms = (robot_s + time.perf_counter() - t0) * 1e3  # the IoU is accounting too
         self.totals.rounds += 1
         return state
