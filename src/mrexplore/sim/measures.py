@@ -83,7 +83,8 @@ class EpisodeMeasures:
     plan_ms_p95: float
     wall_s: float
     done_reason: str
-    """``no_frontiers`` / ``no_reachable_frontiers`` (explored), or ``max_steps`` (budget ran out)."""
+    """``no_frontiers`` / ``no_reachable_frontiers`` (explored), ``plan_done`` (the oracle finished its
+    viewpoints), or ``max_steps`` (budget ran out)."""
     rounds: int = 0
     """Communication rounds: every robot sent its map to the centre once per round (one per decision)."""
     bytes_grid: int = 0
