@@ -79,8 +79,7 @@ def main() -> int:
             iou_exact.append(free_iou(rebuilt == CellState.FREE, free))
             iou_paper.append(free_iou(paper, free))
 
-    observe_warm = load_map("generated:0")  # compile the numba kernels outside the timings
-    run_mission(observe_warm, strategy, seed=0, mission_cfg=None)
+    run_mission(load_map("generated:0"), strategy, seed=0)  # compile the numba kernels outside the timings
     result = run_mission(truth, strategy, seed=0, observer=observe, mission_cfg=MissionConfig(max_steps=args.max_steps))
     total = np.add(np.add(times["encode"], times["decode"]), times["reconstruct"])
     print(f"map {path.stem} ({truth.shape[0]}x{truth.shape[1]} cells), hier, 3 robots, {len(total)} robot-rounds")

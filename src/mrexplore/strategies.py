@@ -63,6 +63,38 @@ class Decision:
     done_reason: str | None
 
 
+_NO_ROUTE = np.zeros((0, 2), dtype=np.int32)
+
+
+def _ended(state: StateGrid, frontiers: Frontiers, clusters: Clusters, n: int, reason: str) -> Decision:
+    """A decision that ends the mission: no goal, route or path for anyone."""
+    none = [_NO_ROUTE] * n
+    unassigned = Assignment(np.full(n, UNASSIGNED, dtype=np.int64))
+    return Decision(state, frontiers, clusters, unassigned, np.tile(NO_GOAL, (n, 1)), none, none, reason)
+
+
+def _decision(
+    state: StateGrid,
+    frontiers: Frontiers,
+    clusters: Clusters,
+    assignment: Assignment,
+    routes: list[NDArray[np.int32]],
+    fields: list[NDArray[np.float32]],
+    passable: BoolGrid,
+) -> Decision:
+    """Each robot's goal is the first target of its route (empty: none); its path is read off its own
+    distance field, which already holds every shortest distance from it."""
+    goals = np.tile(NO_GOAL, (len(routes), 1))
+    paths = []
+    for i, route in enumerate(routes):
+        if len(route):
+            goals[i] = route[0]
+            paths.append(descend_path(fields[i], passable, tuple(goals[i])))
+        else:
+            paths.append(_NO_ROUTE)
+    return Decision(state, frontiers, clusters, assignment, goals, routes, paths, None)
+
+
 @dataclass
 class ExplorationPipeline:
     """A complete strategy: the centre's preprocessing, a global planner, and optionally local routing.
@@ -136,22 +168,17 @@ class ExplorationPipeline:
         for i, field_i in enumerate(fields):
             dist[i] = distances_at(field_i, clusters.centers_rc)
         kept = self._committed(clusters, fields, current, dist) if current is not None and self.commitment < 1 else {}
-        empty = Assignment(np.full(n, UNASSIGNED, dtype=np.int64))
-        no_paths = [np.zeros((0, 2), np.int32) for _ in range(n)]
-        goals = np.tile(NO_GOAL, (n, 1))
         if len(clusters) == 0:
-            return Decision(state, frontiers, clusters, empty, goals, no_paths, no_paths, "no_frontiers")
+            return _ended(state, frontiers, clusters, n, "no_frontiers")
         if not np.isfinite(dist).any():
-            return Decision(state, frontiers, clusters, empty, goals, no_paths, no_paths, "no_reachable_frontiers")
+            return _ended(state, frontiers, clusters, n, "no_reachable_frontiers")
         problem = AssignmentProblem(np.asarray(robots_rc, np.int32), clusters, dist, resolution_m, state)
         assignment = self.planner.assign(problem)
-        paths, routes = [], []
+        routes = []
         for i, k in enumerate(assignment.cluster_of_robot):
             if k == UNASSIGNED:
-                paths.append(no_paths[i])
-                routes.append(no_paths[i])
-                continue
-            if kept.get(i, (None,))[0] == k:
+                targets = _NO_ROUTE
+            elif kept.get(i, (None,))[0] == k:
                 targets = kept[i][1]
             elif self.local is not None and self.local.applies(int(clusters.sizes[k])):
                 route = self.local.route(passable, tuple(robots_rc[i]), fields[i], clusters.members_of(k), resolution_m)
@@ -159,10 +186,7 @@ class ExplorationPipeline:
             else:
                 targets = clusters.centers_rc[k : k + 1]
             routes.append(targets)
-            goals[i] = targets[0]
-            # The robot's field already holds every shortest distance: read the path off it.
-            paths.append(descend_path(fields[i], passable, tuple(goals[i])))
-        return Decision(state, frontiers, clusters, assignment, goals, routes, paths, None)
+        return _decision(state, frontiers, clusters, assignment, routes, fields, passable)
 
 
 @dataclass
@@ -192,20 +216,15 @@ class CoScanPipeline(ExplorationPipeline):
         counts = np.bincount(labels.ravel())
         un &= counts[labels] >= self.preprocess.min_cluster_size
         n = len(robots_rc)
-        no_paths = [np.zeros((0, 2), np.int32) for _ in range(n)]
-        goals = np.tile(NO_GOAL, (n, 1))
-        empty = Assignment(np.full(n, UNASSIGNED, dtype=np.int64))
         tasks = sample_tasks(np.argwhere(un), self.coscan.task_spacing_m / resolution_m)
         if len(tasks) == 0:
-            return Decision(state, frontiers, Clusters.empty(), empty, goals, no_paths, no_paths, "no_frontiers")
+            return _ended(state, frontiers, Clusters.empty(), n, "no_frontiers")
         passable = state == CellState.FREE
         fields = distance_fields(passable, robots_rc)
         d_robots = np.stack([distances_at(f, tasks) for f in fields])
         keep = cap_tasks(d_robots.min(axis=0), self.coscan.tasks_per_robot * n)
         if len(keep) == 0:
-            return Decision(
-                state, frontiers, Clusters.empty(), empty, goals, no_paths, no_paths, "no_reachable_frontiers"
-            )
+            return _ended(state, frontiers, Clusters.empty(), n, "no_reachable_frontiers")
         tasks, d_robots = tasks[keep], d_robots[:, keep]
         d_tasks = np.stack([distances_at(f, tasks) for f in distance_fields(passable, tasks)])
         d_tasks = np.minimum(d_tasks, d_tasks.T)  # equal up to float rounding; keep it symmetric
@@ -213,19 +232,15 @@ class CoScanPipeline(ExplorationPipeline):
         sizes = np.bincount(lloyd.labels, minlength=len(lloyd.centroids)).astype(np.int32)
         clusters = Clusters(tasks[lloyd.centroids], sizes, tasks, lloyd.labels.astype(np.int32))
         assignment = Assignment(match_min_cost(d_robots[:, lloyd.centroids]))
-        paths, routes = [], []
+        routes = []
         for i, k in enumerate(assignment.cluster_of_robot):
             if k == UNASSIGNED:
-                paths.append(no_paths[i])
-                routes.append(no_paths[i])
+                routes.append(_NO_ROUTE)
                 continue
             members = np.flatnonzero(lloyd.labels == k)
             order = two_opt_tour(d_robots[i, members], d_tasks[np.ix_(members, members)])
-            targets = tasks[members[order]]
-            routes.append(targets)
-            goals[i] = targets[0]
-            paths.append(descend_path(fields[i], passable, tuple(goals[i])))
-        return Decision(state, frontiers, clusters, assignment, goals, routes, paths, None)
+            routes.append(tasks[members[order]])
+        return _decision(state, frontiers, clusters, assignment, routes, fields, passable)
 
 
 @dataclass
@@ -264,28 +279,16 @@ class OraclePipeline(ExplorationPipeline):
             raise MrExploreError("the oracle needs the ground truth: call prepare() before decide()")
         n = len(robots_rc)
         truth = self._truth_state
-        if current is None:
-            current = [np.zeros((0, 2), np.int32)] * n
         # The first decision hands out the plan; later ones keep each robot on what is left of its route.
-        routes = self._plan if not any(len(c) for c in current) and self._plan is not None else list(current)
-        self._plan = [np.zeros((0, 2), np.int32)] * n
+        routes = list(current) if current is not None and any(len(c) for c in current) else self._plan
+        self._plan = [_NO_ROUTE] * n
         frontiers = detect_frontiers(state)
-        goals = np.tile(NO_GOAL, (n, 1))
-        no_path = np.zeros((0, 2), np.int32)
         if not any(len(r) for r in routes):
-            empty = Assignment(np.full(n, UNASSIGNED, dtype=np.int64))
-            return Decision(truth, frontiers, Clusters.empty(), empty, goals, [no_path] * n, [no_path] * n, "plan_done")
+            return _ended(truth, frontiers, Clusters.empty(), n, "plan_done")
         passable = truth == CellState.FREE
-        fields = distance_fields(passable, robots_rc)
-        paths = []
-        for i, route in enumerate(routes):
-            if len(route):
-                goals[i] = route[0]
-                paths.append(descend_path(fields[i], passable, tuple(goals[i])))
-            else:
-                paths.append(no_path)
         owner = np.array([i if len(r) else UNASSIGNED for i, r in enumerate(routes)], dtype=np.int64)
-        return Decision(truth, frontiers, Clusters.empty(), Assignment(owner), goals, list(routes), paths, None)
+        fields = distance_fields(passable, robots_rc)
+        return _decision(truth, frontiers, Clusters.empty(), Assignment(owner), routes, fields, passable)
 
 
 CENTRE_COMMITMENT = 0.5

@@ -198,7 +198,7 @@ def test_deltas_rebuild_what_full_maps_rebuild() -> None:
         full, incremental = sender.send(seen, rnd, (3, 2))
         full_centre.receive(decode(full))
         delta_centre.receive(decode(incremental))
-        sender.acknowledged(incremental)
+        sender.acknowledged(decode(incremental))
         assert np.array_equal(full_centre.state(), delta_centre.state())
         assert len(incremental) <= len(full)
         kinds.append(decode(incremental).is_delta)

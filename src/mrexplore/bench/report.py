@@ -198,8 +198,9 @@ def write_plots(rows: list[Row], strategies: Sequence[str], out_dir: Path) -> li
     fig, ax = plt.subplots(figsize=(max(4.5, 1.6 + 1.4 * len(classes) * len(strategies) / 3), 3.6))
     width = 0.8 / max(1, len(strategies))
     for k, s in enumerate(strategies):
-        means = [float(np.mean(_steps(rows, s, c))) if _steps(rows, s, c) else 0.0 for c in classes]
-        stds = [float(np.std(_steps(rows, s, c))) if _steps(rows, s, c) else 0.0 for c in classes]
+        per_class = [_steps(rows, s, c) or [0.0] for c in classes]
+        means = [float(np.mean(v)) for v in per_class]
+        stds = [float(np.std(v)) for v in per_class]
         ax.bar(np.arange(len(classes)) + k * width, means, width, yerr=stds, capsize=2, label=s)
     ax.set_xticks(np.arange(len(classes)) + width * (len(strategies) - 1) / 2, classes)
     ax.set_ylabel("steps (mean ± std)")

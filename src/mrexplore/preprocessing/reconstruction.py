@@ -23,7 +23,7 @@ from mrexplore.types import BoolGrid, CellState, GridRC, MrExploreError, StateGr
 
 _NO_FENCE = np.zeros((0, 0), dtype=bool)
 
-__all__ = ["fill_free", "fill_paper", "reconstruct", "merge_reconstructions", "CentreMap", "free_iou"]
+__all__ = ["fill_free", "fill_paper", "reconstruct", "CentreMap", "free_iou"]
 
 _NOT_HEARD = -1
 """Round held for a robot the centre has not heard from."""
@@ -90,15 +90,6 @@ def reconstruct(codes: NDArray[np.uint8], seeds: NDArray[np.int64]) -> StateGrid
     return _state_of(free, occupied)
 
 
-def merge_reconstructions(states: list[StateGrid], closing_size_cells: int) -> StateGrid:
-    """The centre's grid from robots' grids: free where some robot has free space and none an obstacle,
-    occupied where some robot has an obstacle, then closed (paper IV-A: noise removed by closing after
-    reconstruction)."""
-    free = np.logical_or.reduce([s == CellState.FREE for s in states])
-    occupied = np.logical_or.reduce([s == CellState.OCCUPIED for s in states])
-    return close_unknown_holes(_state_of(free, occupied), closing_size_cells)
-
-
 class CentreMap:
     """The centre's memory of every robot's last map; takes full maps and deltas, gives the merged grid.
 
@@ -148,12 +139,10 @@ class CentreMap:
         self._round[i] = message.round
         self._known[i] = True
 
-    def robot_state(self, robot: int) -> StateGrid:
-        """One robot's rebuilt grid (all unknown before its first message)."""
-        return reconstruct(self._codes[robot], self._seeds[robot])
-
     def state(self) -> StateGrid:
-        """The merged, closed grid the planners run on (the rule of :func:`merge_reconstructions`)."""
+        """The merged, closed grid the planners run on: free where some robot has free space and none an
+        obstacle, occupied where some robot has an obstacle, then closed (paper IV-A: noise removed by
+        closing after reconstruction)."""
         free = np.zeros(self.shape, dtype=bool)
         occupied = np.zeros(self.shape, dtype=bool)
         for i in range(len(self._codes)):

@@ -85,7 +85,6 @@ def pick_seeds(codes: np.ndarray, free: np.ndarray, position: int) -> np.ndarray
     needs no seed."""
     H, W = codes.shape
     filled = np.zeros((H, W), dtype=np.bool_)
-    seeds = np.empty(0, dtype=np.int64)
     no_fence = np.zeros((0, 0), dtype=np.bool_)
     out = []
     if free.ravel()[position]:

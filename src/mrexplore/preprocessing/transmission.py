@@ -24,7 +24,7 @@ from mrexplore.config import PreprocessConfig, SensorConfig
 from mrexplore.preprocessing.frontiers import close_unknown_holes
 from mrexplore.preprocessing.reconstruction import CentreMap, free_iou
 from mrexplore.preprocessing.sparse_codec import HEADER, decode, encode
-from mrexplore.preprocessing.sparse_map import FULL, changed_since, sparse_frontier_map
+from mrexplore.preprocessing.sparse_map import FULL, SparseFrontierMap, changed_since, sparse_frontier_map
 from mrexplore.sim.belief import Belief
 from mrexplore.types import CellState, StateGrid
 
@@ -83,9 +83,8 @@ class RobotSender:
                 incremental = delta_bytes
         return full_bytes, incremental
 
-    def acknowledged(self, message_bytes: bytes) -> None:
+    def acknowledged(self, message: SparseFrontierMap) -> None:
         """The centre confirmed this round's message: later deltas apply to it."""
-        message = decode(message_bytes)
         if message.is_delta:
             np.put(self._acked, message.cells, message.codes)
         else:
@@ -164,11 +163,11 @@ class TeamLink:
             self.totals.bytes_grid_zlib += packed
             self.totals.bytes_sparse += len(full_bytes)
             self.totals.bytes_sparse_delta += len(delta_bytes)
-            sent = delta_bytes if self.mode == "delta" else full_bytes
             robot_s += time.perf_counter() - t0
-            self.centre.receive(decode(sent))
+            received = decode(delta_bytes if self.mode == "delta" else full_bytes)
+            self.centre.receive(received)
             # The simulated link is reliable: the centre acknowledges every message at once.
-            self.senders[i].acknowledged(sent)
+            self.senders[i].acknowledged(received)
         state = self.centre.state()
         t0 = time.perf_counter()
         self.totals.iou.append(free_iou(state == CellState.FREE, team_free))
