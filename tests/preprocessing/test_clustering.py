@@ -7,10 +7,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.distance import pdist
-from sklearn.cluster import MeanShift
+from sklearn.cluster import MeanShift, get_bin_seeds
 
 from mrexplore.config import PreprocessConfig
-from mrexplore.preprocessing.clustering import adaptive_bandwidth, cluster_frontiers, mean_shift
+from mrexplore.preprocessing.clustering import adaptive_bandwidth, bin_seeds, cluster_frontiers, mean_shift
 
 
 def test_two_frontier_segments_and_a_stray_cell() -> None:
@@ -54,6 +54,17 @@ def test_mean_shift_equals_sklearn(seed: int, n: int, extent: int, tie_free: boo
     modes, labels = mean_shift(pts, bw)
     np.testing.assert_allclose(modes, ref.cluster_centers_)
     np.testing.assert_array_equal(labels, ref.labels_)
+
+
+@pytest.mark.filterwarnings("ignore:Binning data failed")
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10**6), st.integers(1, 200), st.integers(2, 80), st.floats(0.5, 30.0))
+def test_bin_seeds_equal_sklearn(seed: int, n: int, extent: int, bin_size: float) -> None:
+    pts = np.random.default_rng(seed).integers(0, extent, (n, 2)).astype(float)  # unsorted, with repeats
+    ref = get_bin_seeds(pts, bin_size, 1)
+    ours = bin_seeds(pts, bin_size)
+    assert ours.dtype == ref.dtype
+    np.testing.assert_array_equal(ours, ref)
 
 
 def test_centres_are_members() -> None:

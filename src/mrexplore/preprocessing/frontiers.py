@@ -6,7 +6,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
 
 from mrexplore.types import BoolGrid, CellState, StateGrid
 
@@ -56,11 +55,46 @@ def close_unknown_holes(state: StateGrid, size_cells: int) -> StateGrid:
     """
     if size_cells <= 1:
         return state.copy()
-    structure = np.ones((size_cells, size_cells), dtype=bool)
     free = state == CellState.FREE
-    closed = ndimage.binary_erosion(ndimage.binary_dilation(free, structure), structure, border_value=1)
     out = state.copy()
-    out[closed & (state == CellState.UNKNOWN)] = CellState.FREE
+    box = _known_box(free, size_cells)
+    if box is None:
+        return out
+    r = size_cells // 2
+    # Only cells within 2r of free space can change; outside that box the dilation is empty.
+    # Erosion is the dilation of the complement; beyond the grid the complement is empty (border 1, as
+    # scipy's binary_erosion). Beyond a side of the box inside the grid it is not, but a cell within r of
+    # such a side is more than r from free space, so its own dilation is empty and it stays unchanged.
+    closed = ~_box_dilate(~_box_dilate(free[box], r), r)
+    sub = out[box]
+    sub[closed & (sub == CellState.UNKNOWN)] = CellState.FREE
+    return out
+
+
+def _known_box(mask: BoolGrid, size_cells: int) -> tuple[slice, slice] | None:
+    """The bounding box of ``mask`` grown by the closing's reach (2 * radius + 1), clipped to the grid."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    if len(rows) == 0:
+        return None
+    cols = np.flatnonzero(mask.any(axis=0))
+    pad = 2 * (size_cells // 2) + 1
+    H, W = mask.shape
+    return (
+        slice(max(rows[0] - pad, 0), min(rows[-1] + 1 + pad, H)),
+        slice(max(cols[0] - pad, 0), min(cols[-1] + 1 + pad, W)),
+    )
+
+
+def _box_dilate(mask: BoolGrid, r: int) -> BoolGrid:
+    """Dilation by a (2r+1)-square, separably by shifted ORs; beyond the array counts as False."""
+    out = mask.copy()
+    for k in range(1, r + 1):
+        out[k:] |= mask[:-k]
+        out[:-k] |= mask[k:]
+    rows = out.copy()
+    for k in range(1, r + 1):
+        out[:, k:] |= rows[:, :-k]
+        out[:, :-k] |= rows[:, k:]
     return out
 
 
@@ -82,6 +116,27 @@ def detect_frontiers(state: StateGrid) -> Frontiers:
     ([[1, 1], [2, 2]], [[1, 0], [1, 1]])
     """
     free = state == CellState.FREE
-    channels = {s: (state == s).astype(np.uint8) for s in (CellState.UNKNOWN, CellState.OCCUPIED)}
-    counts = {s: ndimage.convolve(ch, FOUR_NEIGHBOUR_KERNEL, mode="constant", cval=0) for s, ch in channels.items()}
-    return Frontiers(un_mask=free & (counts[CellState.UNKNOWN] > 0), occ_mask=free & (counts[CellState.OCCUPIED] > 0))
+    un_mask = np.zeros(state.shape, dtype=bool)
+    occ_mask = np.zeros(state.shape, dtype=bool)
+    box = _known_box(free, 1)  # frontiers are free cells: only the free box (+1 for its neighbours) matters
+    if box is None:
+        return Frontiers(un_mask=un_mask, occ_mask=occ_mask)
+    sub, sub_free = state[box], free[box]
+    for s, out in ((CellState.UNKNOWN, un_mask), (CellState.OCCUPIED, occ_mask)):
+        out[box] = sub_free & (_convolve_kernel(sub == s, FOUR_NEIGHBOUR_KERNEL) > 0)
+    return Frontiers(un_mask=un_mask, occ_mask=occ_mask)
+
+
+def _convolve_kernel(channel: BoolGrid, kernel: NDArray[np.uint8]) -> NDArray[np.uint8]:
+    """``channel`` convolved with a 3 x 3 0/1 kernel, zero beyond the grid: a sum of shifted copies
+    (as ``scipy.ndimage.convolve(mode="constant")``, several times faster for so small a kernel)."""
+    ch = channel.astype(np.uint8)
+    out = np.zeros(ch.shape, dtype=np.uint8)
+    H, W = ch.shape
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            if kernel[1 + dr, 1 + dc]:  # out[r] += ch[r - dr]: the kernel flipped, as a convolution
+                out[max(dr, 0) : H + min(dr, 0), max(dc, 0) : W + min(dc, 0)] += ch[
+                    max(-dr, 0) : H + min(-dr, 0), max(-dc, 0) : W + min(-dc, 0)
+                ]
+    return out
