@@ -27,6 +27,10 @@ __all__ = ["main", "build_parser"]
 EXIT_BAD_INPUT = 2
 DEFAULT_STRATEGY = "hier"
 COMMITMENT_HELP = "goal hysteresis in [0, 1] (1: none; default: 0.5 for nearest/utility, 1 for hier)"
+MIN_REPLAN_HELP = (
+    "steps a robot whose goal was seen drives on before the team replans "
+    f"(default {MissionConfig.min_replan_steps}; 1: at once)"
+)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -65,6 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--commitment", type=float, default=None, help=COMMITMENT_HELP)
     ex.add_argument("--seed", type=int, default=0, help="seed of starts and sensor noise (default 0)")
     ex.add_argument("--max-steps", type=int, default=MissionConfig.max_steps, help="step budget (default 20000)")
+    ex.add_argument("--min-replan-steps", type=int, default=MissionConfig.min_replan_steps, help=MIN_REPLAN_HELP)
     ex.add_argument(
         "--resolution", type=float, default=MapConfig.resolution_m, help="working cell size in metres (default 0.05)"
     )
@@ -116,6 +121,7 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("--commitment", type=float, default=None, help=COMMITMENT_HELP)
     be.add_argument("--resolution", type=float, default=MapConfig.resolution_m, help="cell size, metres")
     be.add_argument("--max-steps", type=int, default=MissionConfig.max_steps, help="step budget per episode")
+    be.add_argument("--min-replan-steps", type=int, default=MissionConfig.min_replan_steps, help=MIN_REPLAN_HELP)
     be.add_argument(
         "--progress",
         action=argparse.BooleanOptionalAction,
@@ -140,11 +146,11 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
     for n in robots:
         SimConfig(robots=n)
     MapConfig(resolution_m=args.resolution)
-    MissionConfig(max_steps=args.max_steps)
+    MissionConfig(max_steps=args.max_steps, min_replan_steps=args.min_replan_steps)
     GlobalPlanningConfig(commitment=args.commitment)
     maps = expand_maps(args.maps)
     specs = [
-        EpisodeSpec(m, s, n, seed, args.resolution, args.max_steps, args.commitment)
+        EpisodeSpec(m, s, n, seed, args.resolution, args.max_steps, args.commitment, args.min_replan_steps)
         for m in maps
         for s in strategies
         for n in robots
@@ -160,7 +166,9 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
 def _explore(args: argparse.Namespace) -> dict[str, Any]:
     map_cfg = MapConfig(resolution_m=args.resolution, pixel_size_m=args.pixel_size)
     sim_cfg = SimConfig(robots=args.robots)
-    mission_cfg = MissionConfig(max_steps=args.max_steps, transmission=args.transmission)
+    mission_cfg = MissionConfig(
+        max_steps=args.max_steps, min_replan_steps=args.min_replan_steps, transmission=args.transmission
+    )
     strategy = make_strategy(args.strategy, GlobalPlanningConfig(commitment=args.commitment), local=not args.no_local)
     if args.save_map and not Path(args.save_map).resolve().parent.is_dir():
         raise MrExploreError(f"--save-map folder {Path(args.save_map).parent} does not exist; create it first")

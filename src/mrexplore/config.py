@@ -239,6 +239,11 @@ class MissionConfig:
     """Step budget, >= 1; reaching it ends the mission as ``max_steps`` (truncated, never success)."""
     replan_every_steps: int = 25
     """A decision is taken at least this often, steps, >= 1."""
+    min_replan_steps: int = 10
+    """A decision asked for by a robot whose goal stopped being a frontier waits until this many steps have
+    passed since the last one (the robot drives on meanwhile), steps, >= 1 (1: at once). A robot left with
+    no path, or a blocked one, is served at once. Replanning at once made teams chase goals that vanish as
+    they come into view: 20-37% more steps for hier, nearest and utility on 20 maps, 3-7 times the time."""
     transmission: str = "delta"
     """What the centre rebuilds its grid from: ``delta`` (changes since the last acknowledged sparse
     frontier map) or ``full`` (the whole sparse map every round, the paper's). Same grid, fewer bytes."""
@@ -246,6 +251,7 @@ class MissionConfig:
     def __post_init__(self) -> None:
         _require(self.max_steps >= 1, "max-steps", ">= 1", self.max_steps)
         _require(self.replan_every_steps >= 1, "replan_every_steps", ">= 1", self.replan_every_steps)
+        _require(self.min_replan_steps >= 1, "min_replan_steps", ">= 1", self.min_replan_steps)
         _require(self.transmission in ("delta", "full"), "transmission", "'delta' or 'full'", self.transmission)
 
 

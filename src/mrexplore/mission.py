@@ -1,11 +1,12 @@
 """One exploration mission: simulator + strategy, the replanning events, termination and measures.
 
 Replanning is the same for every strategy. A decision (the whole team re-assigned at the centre) is
-taken when a robot reached its goal, when its goal is no longer a frontier, when its path is blocked,
-and at least every ``replan_every_steps`` steps. A robot with a local route (paper IV-C) first moves on
-to the next target of its route that is still a frontier; only when none is left does its goal count
-as reached. The mission ends as the paper's: no cluster of the
-minimum size left, or none reachable; or when the step budget runs out (``max_steps``, never success).
+taken when a robot reached its goal, when its path is blocked, when its goal is no longer a frontier
+and ``min_replan_steps`` passed since the last decision, and at least every ``replan_every_steps``
+steps. A robot with a local route (paper IV-C) first moves on to the next target of its route that is
+still a frontier; only when none is left does its goal count as reached. The mission ends as the
+paper's: no cluster of the minimum size left, or none reachable; or when the step budget runs out
+(``max_steps``, never success).
 """
 
 from __future__ import annotations
@@ -138,9 +139,17 @@ def run_mission(
                 and _goal_still_frontier(sim.team_observed, goals[i])
             ):
                 blacklist[goals[i, 0], goals[i, 1]] = True  # stood on it and it stayed a frontier
-            resolved = reached or (frontier_goals and not _goal_still_frontier(sim.team_observed, goals[i]))
-            if blocked[i] or sim.path_ahead_blocked(i) or (resolved and not advance(i)):
+            if blocked[i] or sim.path_ahead_blocked(i):
                 need = True
+            elif reached:
+                need |= not advance(i)
+            elif (
+                frontier_goals
+                and sim.steps - last_decision_step >= mission_cfg.min_replan_steps
+                and not _goal_still_frontier(sim.team_observed, goals[i])
+            ):
+                # Driving on towards a goal already seen costs little; a decision costs the whole team.
+                need |= not advance(i)
         if need:
             t = time.perf_counter()
             state = link.exchange(sim.beliefs, sim.positions_rc)

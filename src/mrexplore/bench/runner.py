@@ -64,6 +64,7 @@ class EpisodeSpec:
     resolution_m: float = 0.05
     max_steps: int = 20000
     commitment: float | None = None
+    min_replan_steps: int = MissionConfig.min_replan_steps
 
     @property
     def key(self) -> tuple[str, str, int, int]:
@@ -108,7 +109,7 @@ def run_episode(spec: EpisodeSpec) -> dict[str, Any]:
         truth,
         make_strategy(spec.strategy, GlobalPlanningConfig(commitment=spec.commitment)),
         SimConfig(robots=spec.robots),
-        MissionConfig(max_steps=spec.max_steps),
+        MissionConfig(max_steps=spec.max_steps, min_replan_steps=spec.min_replan_steps),
         seed=spec.seed,
         progress=False,
     )
