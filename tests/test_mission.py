@@ -127,3 +127,28 @@ def test_centre_plans_the_same_from_deltas_as_from_full_maps(small_map) -> None:
 def test_bad_transmission_mode_refused() -> None:
     with pytest.raises(MrExploreError, match=r"^transmission must be 'delta' or 'full', got 'zip'$"):
         MissionConfig(transmission="zip")
+
+
+@pytest.mark.parametrize("k", [1, 10])
+def test_vanished_goals_wait_min_replan_steps(small_map, k: int) -> None:
+    # A decision sooner than k steps after the last one is only for a robot at its path's end (or blocked).
+    decisions: list[tuple[int, bool]] = []  # (step, some robot was at its path's end or blocked)
+    last: list[object] = [None]
+    idle = [False]
+
+    def observe(sim, decision, goals) -> None:
+        if decision is not last[0]:
+            decisions.append((sim.steps, idle[0]))
+            last[0] = decision
+        idle[0] = any(sim.at_path_end(i) or sim.path_ahead_blocked(i) for i in range(sim.n_robots))
+
+    cfg = MissionConfig(min_replan_steps=k, replan_every_steps=1000)
+    run_mission(small_map, make_strategy("nearest"), SimConfig(robots=2), cfg, seed=1, observer=observe)
+    gaps = [(b[0] - a[0], b[1]) for a, b in zip(decisions, decisions[1:], strict=False)]
+    assert all(gap >= k or idle_then for gap, idle_then in gaps)
+    assert any(gap < 10 and not idle_then for gap, idle_then in gaps) == (k == 1)  # k=1 replans for vanished goals
+
+
+def test_bad_min_replan_steps_refused() -> None:
+    with pytest.raises(MrExploreError, match=r"^min_replan_steps must be >= 1, got 0$"):
+        MissionConfig(min_replan_steps=0)
