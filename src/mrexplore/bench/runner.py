@@ -7,6 +7,7 @@ same command skips every episode already in the file.
 from __future__ import annotations
 
 import csv
+import functools
 import multiprocessing
 import os
 import sys
@@ -20,9 +21,11 @@ import numpy as np
 from tqdm import tqdm
 
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig
+from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import run_mission
 from mrexplore.strategies import make_strategy
+from mrexplore.threads import THREADS_ENV
 from mrexplore.types import MrExploreError
 
 __all__ = [
@@ -102,9 +105,18 @@ def parse_curve(text: str) -> tuple[np.ndarray, np.ndarray]:
     return np.array([int(a) for a, _ in pairs]), np.array([float(b) for _, b in pairs])
 
 
+@functools.lru_cache(maxsize=2)
+def _load_shared(map_path: str, resolution_m: float) -> GroundTruthMap:
+    """A worker runs the episodes of one map one after another: load it once (read-only, as missions
+    never write the ground truth)."""
+    truth = load_map(map_path, MapConfig(resolution_m=resolution_m))
+    truth.occupied.flags.writeable = False
+    return truth
+
+
 def run_episode(spec: EpisodeSpec) -> dict[str, Any]:
     """Run one episode and return its CSV row."""
-    truth = load_map(spec.map_path, MapConfig(resolution_m=spec.resolution_m))
+    truth = _load_shared(spec.map_path, spec.resolution_m)
     result = run_mission(
         truth,
         make_strategy(spec.strategy, GlobalPlanningConfig(commitment=spec.commitment)),
@@ -195,7 +207,14 @@ def run_bench(
     else:
         # Spawned, not forked: a parent that already ran a mission holds thread pools, and a forked
         # child inherits their locks in whatever state they were.
-        with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        # Episodes already fill the cores: each worker's kernels run on as many threads as are left over.
+        threads = max(1, (os.cpu_count() or 1) // workers)
+        with ProcessPoolExecutor(
+            max_workers=workers,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_set_threads,
+            initargs=(threads,),
+        ) as pool:
             pending: set[Future[dict[str, Any]]] = {pool.submit(run_episode, s) for s in todo}
             while pending:
                 finished, pending = wait(pending, return_when=FIRST_COMPLETED)
@@ -204,6 +223,10 @@ def run_bench(
                     bar.update()
     bar.close()
     return len(todo)
+
+
+def _set_threads(threads: int) -> None:
+    os.environ[THREADS_ENV] = str(threads)
 
 
 def _run_ray(todo: list[EpisodeSpec], results_csv: Path, workers: int, address: str, bar: tqdm) -> None:
@@ -216,7 +239,8 @@ def _run_ray(todo: list[EpisodeSpec], results_csv: Path, workers: int, address: 
         kwargs: dict[str, Any] = {"num_cpus": workers} if address == "local" else {"address": address}
         ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
     try:
-        remote = ray.remote(num_cpus=1)(run_episode)
+        # One CPU per task: the task's kernels run on one thread.
+        remote = ray.remote(num_cpus=1, runtime_env={"env_vars": {THREADS_ENV: "1"}})(run_episode)
         pending = [remote.remote(s) for s in todo]
         while pending:
             finished, pending = ray.wait(pending, num_returns=1)

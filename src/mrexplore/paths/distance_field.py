@@ -11,19 +11,16 @@ cell.
 from __future__ import annotations
 
 import math
-import os
-from concurrent.futures import ThreadPoolExecutor
 
 import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
 from mrexplore.paths.moves import DC, DR, move_cost
+from mrexplore.threads import map_threads
 from mrexplore.types import BoolGrid, GridRC
 
 __all__ = ["distance_field", "distance_fields", "distances_at", "descend_path"]
-
-_POOL = ThreadPoolExecutor(max_workers=os.cpu_count() or 1, thread_name_prefix="mrexplore-field")
 
 
 @nb.njit(cache=True, nogil=True)
@@ -138,10 +135,7 @@ def distance_fields(passable: BoolGrid, sources_rc: NDArray[np.integer]) -> list
             out[r0:r1, c0:c1] = _two_queue_dijkstra(crop, r, c)
         return out
 
-    if len(sources_rc) < 2:
-        return [one(s) for s in sources_rc]
-    # The kernel releases the GIL, so threads use every core.
-    return list(_POOL.map(one, list(sources_rc)))
+    return map_threads(one, list(sources_rc))  # the kernel releases the GIL
 
 
 @nb.njit(cache=True, nogil=True)

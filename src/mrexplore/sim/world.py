@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,12 +12,12 @@ from mrexplore.config import SimConfig
 from mrexplore.maps.ground_truth import GroundTruthMap, explorable_region
 from mrexplore.sim.belief import Belief, logit
 from mrexplore.sim.lidar import apply_scan, ray_count, ray_directions, scan_mark
+from mrexplore.threads import map_threads
 from mrexplore.types import BoolGrid
 
 __all__ = ["ExplorationSim", "StepResult"]
 
 _EMPTY_PATH = np.zeros((0, 2), dtype=np.int32)
-_POOL = ThreadPoolExecutor(max_workers=os.cpu_count() or 1, thread_name_prefix="mrexplore-lidar")
 
 
 @dataclass(frozen=True)
@@ -152,7 +150,7 @@ class ExplorationSim:
             r, c = self.positions_rc[i]
             return scan_mark(self._occupied, int(r), int(c), self._dirs, self._range_cells, noises[i], self._mark[i])
 
-        windows = list(_POOL.map(cast, range(self.n_robots))) if self.n_robots > 1 else [cast(0)]
+        windows = map_threads(cast, range(self.n_robots))
         for i, window in enumerate(windows):
             b = self.beliefs[i]
             robot_new, team_new = apply_scan(

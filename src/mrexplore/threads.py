@@ -1,0 +1,53 @@
+"""The one thread pool shared by the numba kernels that release the GIL (beam casting, distance fields).
+
+Threads pay where one mission has the machine to itself. Where missions already run one per core (the
+benchmark's worker processes), they only add hand-over costs, so the benchmark sets ``MREXPLORE_THREADS=1``
+in its workers' environment and every map below runs inline.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from typing import TypeVar
+
+from mrexplore.types import MrExploreError
+
+__all__ = ["THREADS_ENV", "thread_count", "map_threads"]
+
+THREADS_ENV = "MREXPLORE_THREADS"
+_T = TypeVar("_T")
+_R = TypeVar("_R")
+_pool: ThreadPoolExecutor | None = None
+
+
+def thread_count() -> int:
+    """Threads to use: ``$MREXPLORE_THREADS`` when set (>= 1), else one per core."""
+    text = os.environ.get(THREADS_ENV, "")
+    if not text:
+        return os.cpu_count() or 1
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise MrExploreError(f"{THREADS_ENV} must be an integer >= 1, got {text!r}; unset it to use every core")
+    return n
+
+
+def map_threads(fn: Callable[[_T], _R], items: Sequence[_T]) -> list[_R]:
+    """``[fn(x) for x in items]``, on the shared pool when more than one thread is allowed.
+
+    Examples
+    --------
+    >>> map_threads(lambda x: x * x, [1, 2, 3])
+    [1, 4, 9]
+    """
+    global _pool
+    n = thread_count()
+    if n <= 1 or len(items) < 2:
+        return [fn(x) for x in items]
+    if _pool is None or _pool._max_workers != n:  # noqa: SLF001 - resize when the setting changed
+        _pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix="mrexplore")
+    return list(_pool.map(fn, items))
