@@ -206,6 +206,29 @@ def test_deltas_rebuild_what_full_maps_rebuild() -> None:
     assert not kinds[0] and kinds[-1] and len(decode(incremental).cells) == 0
 
 
+@settings(max_examples=100, deadline=None)
+@given(st.integers(0, 10**6))
+def test_a_window_sends_what_the_whole_grid_sends(seed: int) -> None:
+    # A robot seeing more and more of a random map, in a window that grows round by round: every full
+    # map and every delta equals the one built from the whole grid.
+    rng = np.random.default_rng(seed)
+    shape = (int(rng.integers(8, 30)), int(rng.integers(8, 30)))
+    truth = rng.choice(np.array([F, F, F, O], np.uint8), shape)
+    whole, windowed = RobotSender(0, shape), RobotSender(0, shape)
+    r, c = int(rng.integers(0, shape[0])), int(rng.integers(0, shape[1]))
+    h, w = 2, 2
+    for rnd in range(4):
+        h, w = h + int(rng.integers(0, 4)), w + int(rng.integers(0, 4))
+        seen = np.full(shape, U, np.uint8)
+        seen[r : r + h, c : c + w] = truth[r : r + h, c : c + w]
+        seen[r, c] = F
+        window = (slice(max(r - 2, 0), min(r + h + 2, shape[0])), slice(max(c - 2, 0), min(c + w + 2, shape[1])))
+        expected = whole.send(seen, rnd, (r, c))
+        assert windowed.send(seen[window], rnd, (r, c), window) == expected
+        whole.acknowledged(decode(expected[1]))
+        windowed.acknowledged(decode(expected[1]))
+
+
 def test_delta_on_the_wrong_base_is_refused() -> None:
     a, _ = two_robots()
     centre = CentreMap(1, a.shape, 1)

@@ -117,8 +117,24 @@ def component_seeds(free: BoolGrid, codes: NDArray[np.uint8], position_rc: GridR
     return np.sort(seeds)
 
 
-def sparse_frontier_map(state: StateGrid, robot: int, round_: int, position_rc: GridRC) -> SparseFrontierMap:
+def sparse_frontier_map(
+    state: StateGrid,
+    robot: int,
+    round_: int,
+    position_rc: GridRC,
+    origin_rc: GridRC = (0, 0),
+    shape: tuple[int, int] | None = None,
+) -> SparseFrontierMap:
     """Build a robot's full message from its (closed) grid.
+
+    Parameters
+    ----------
+    state:
+        ``(h, w) uint8`` the robot's closed grid, or a window of it: with ``origin_rc`` (the window's first
+        cell in the map) and ``shape`` (the map's), the message indexes the whole map. A window must hold
+        every free cell of the robot with a margin of one cell (beyond a window counts as no state).
+    position_rc:
+        The robot's cell in the map.
 
     Examples
     --------
@@ -127,22 +143,55 @@ def sparse_frontier_map(state: StateGrid, robot: int, round_: int, position_rc: 
     >>> m = sparse_frontier_map(g, 0, 0, (2, 2))
     >>> len(m.cells), m.seeds.tolist()  # 8 boundary cells around one interior cell, the robot's
     (8, [12])
+    >>> w = sparse_frontier_map(g[1:, 1:], 0, 0, (2, 2), origin_rc=(1, 1), shape=(5, 5))
+    >>> w == m  # the same message from a window
+    True
     """
+    shape = state.shape if shape is None else shape
+    r0, c0 = origin_rc
+    r, c = int(position_rc[0]), int(position_rc[1])
     codes = neighbour_codes(state)
-    cells = np.flatnonzero(codes.ravel()).astype(np.int64)
-    seeds = component_seeds(state == CellState.FREE, codes, position_rc)
-    r, c = position_rc
-    return SparseFrontierMap(robot, round_, state.shape, (int(r), int(c)), cells, codes.ravel()[cells], seeds)
-
-
-def changed_since(previous: NDArray[np.uint8], current: SparseFrontierMap, base_round: int) -> SparseFrontierMap:
-    """The delta of a full map ``current`` against the code grid ``previous`` acknowledged at ``base_round``:
-    only the cells whose code changed (RACER-style incremental sharing); seeds are always sent whole."""
-    now = current.code_grid().ravel()
-    before = previous.ravel()
-    cells = np.flatnonzero(now != before).astype(np.int64)
+    local = np.flatnonzero(codes.ravel()).astype(np.int64)
+    seeds = component_seeds(state == CellState.FREE, codes, (r - r0, c - c0))
+    w = state.shape[1]
+    cells = _to_map(local, w, r0, c0, shape[1])
     return SparseFrontierMap(
-        current.robot, current.round, current.shape, current.position_rc, cells, now[cells], current.seeds, base_round
+        robot, round_, shape, (r, c), cells, codes.ravel()[local], _to_map(seeds, w, r0, c0, shape[1])
+    )
+
+
+def _to_map(local: NDArray[np.int64], w: int, r0: int, c0: int, width: int) -> NDArray[np.int64]:
+    """Row-major indices in a window of width ``w`` at ``(r0, c0)`` as indices in the map (order kept)."""
+    return (local // w + r0) * width + (local % w + c0)
+
+
+def changed_since(
+    previous: NDArray[np.uint8],
+    current: SparseFrontierMap,
+    base_round: int,
+    window: tuple[slice, slice] | None = None,
+) -> SparseFrontierMap:
+    """The delta of a full map ``current`` against the code grid ``previous`` acknowledged at ``base_round``:
+    only the cells whose code changed (RACER-style incremental sharing); seeds are always sent whole.
+
+    ``window``: compare only there, when both maps have every boundary cell inside it."""
+    if window is None:
+        window = (slice(0, current.shape[0]), slice(0, current.shape[1]))
+    rows, cols = window
+    h, w = rows.stop - rows.start, cols.stop - cols.start
+    width = current.shape[1]
+    now = np.zeros((h, w), dtype=np.uint8)
+    now[current.cells // width - rows.start, current.cells % width - cols.start] = current.codes
+    local = np.flatnonzero(now != previous[window]).astype(np.int64)
+    return SparseFrontierMap(
+        current.robot,
+        current.round,
+        current.shape,
+        current.position_rc,
+        _to_map(local, w, rows.start, cols.start, width),
+        now.ravel()[local],
+        current.seeds,
+        base_round,
     )
 
 

@@ -25,7 +25,7 @@ from mrexplore.preprocessing.frontiers import close_unknown_holes
 from mrexplore.preprocessing.reconstruction import CentreMap, free_iou
 from mrexplore.preprocessing.sparse_codec import HEADER, decode, encode
 from mrexplore.preprocessing.sparse_map import FULL, SparseFrontierMap, changed_since, sparse_frontier_map
-from mrexplore.sim.belief import Belief
+from mrexplore.sim.belief import Belief, classify
 from mrexplore.types import CellState, StateGrid
 
 __all__ = ["TeamLink", "RobotSender", "TransmissionTotals", "occupancy_grid_bytes", "TRANSMISSION_MODES"]
@@ -72,23 +72,31 @@ class RobotSender:
         self._acked = np.zeros(shape, dtype=np.uint8)
         self._acked_round = FULL
 
-    def send(self, closed: StateGrid, round_: int, position_rc: tuple[int, int]) -> tuple[bytes, bytes]:
-        """``(full, incremental)`` message bytes of this round from the robot's closed grid."""
-        full = sparse_frontier_map(closed, self.robot, round_, position_rc)
+    def send(
+        self, closed: StateGrid, round_: int, position_rc: tuple[int, int], window: tuple[slice, slice] | None = None
+    ) -> tuple[bytes, bytes]:
+        """``(full, incremental)`` message bytes of this round from the robot's closed grid.
+
+        ``window``: where ``closed`` lies in the map when it is a window of the robot's grid (holding every
+        free cell with a one-cell margin, and growing from round to round); None: ``closed`` is the map."""
+        if window is None:
+            window = (slice(0, closed.shape[0]), slice(0, closed.shape[1]))
+        origin = (window[0].start, window[1].start)
+        full = sparse_frontier_map(closed, self.robot, round_, position_rc, origin, self._acked.shape)
         full_bytes = encode(full)
         incremental = full_bytes
         if self._acked_round != FULL:
-            delta_bytes = encode(changed_since(self._acked, full, self._acked_round))
+            # The acknowledged map's cells lie in an earlier, smaller window: comparing in this one suffices.
+            delta_bytes = encode(changed_since(self._acked, full, self._acked_round, window))
             if len(delta_bytes) < len(full_bytes):
                 incremental = delta_bytes
         return full_bytes, incremental
 
     def acknowledged(self, message: SparseFrontierMap) -> None:
         """The centre confirmed this round's message: later deltas apply to it."""
-        if message.is_delta:
-            np.put(self._acked, message.cells, message.codes)
-        else:
-            self._acked = message.code_grid()
+        if not message.is_delta:
+            self._acked.fill(0)
+        np.put(self._acked, message.cells, message.codes)
         self._acked_round = message.round
 
 
@@ -151,13 +159,17 @@ class TeamLink:
         r = self.totals.rounds
         team_free = np.zeros(self.centre.shape, dtype=bool)
         robot_s = 0.0
+        # A robot works on the box of its observed cells, grown by the closing's reach plus one cell: the
+        # closing, the codes and the seeds there equal those of the whole grid (nothing beyond is free).
+        margin = 2 * (self.preprocess.closing_size_cells // 2) + 2
         for i, belief in enumerate(beliefs):
             t0 = time.perf_counter()
-            own = belief.state(self.sensor)
-            team_free |= own == CellState.FREE
+            window = belief.window(margin)
+            own = classify(belief.log_odds[window], belief.observed[window], self.sensor)
+            team_free[window] |= own == CellState.FREE
             closed = close_unknown_holes(own, self.preprocess.closing_size_cells)
             pos = (int(positions_rc[i][0]), int(positions_rc[i][1]))
-            full_bytes, delta_bytes = self.senders[i].send(closed, r, pos)
+            full_bytes, delta_bytes = self.senders[i].send(closed, r, pos, window)
             raw, packed = occupancy_grid_bytes(own)
             self.totals.bytes_grid += raw
             self.totals.bytes_grid_zlib += packed

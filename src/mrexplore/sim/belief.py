@@ -34,6 +34,8 @@ class Belief:
 
     log_odds: np.ndarray
     observed: BoolGrid
+    box: tuple[int, int, int, int] | None = None
+    """``(r0, r1, c0, c1)`` half-open rows and columns holding every observed cell; None: none observed."""
 
     @classmethod
     def empty(cls, shape: tuple[int, int]) -> Belief:
@@ -42,6 +44,29 @@ class Belief:
     def state(self, sensor: SensorConfig) -> StateGrid:
         """Three-state view, ``(H, W) uint8`` of :class:`CellState`."""
         return classify(self.log_odds, self.observed, sensor)
+
+    def note_window(self, window: tuple[int, int, int, int]) -> None:
+        """Grow :attr:`box` by a scan's window ``(r0, r1, c0, c1)``."""
+        r0, r1, c0, c1 = window
+        if self.box is not None:
+            b0, b1, d0, d1 = self.box
+            r0, r1, c0, c1 = min(r0, b0), max(r1, b1), min(c0, d0), max(c1, d1)
+        self.box = (r0, r1, c0, c1)
+
+    def window(self, margin: int) -> tuple[slice, slice]:
+        """:attr:`box` grown by ``margin`` cells and clipped to the grid (the whole grid when unknown).
+
+        Examples
+        --------
+        >>> b = Belief.empty((10, 10)); b.note_window((4, 6, 2, 3))
+        >>> b.window(2)
+        (slice(2, 8, None), slice(0, 5, None))
+        """
+        H, W = self.observed.shape
+        if self.box is None:
+            return (slice(0, H), slice(0, W))
+        r0, r1, c0, c1 = self.box
+        return (slice(max(r0 - margin, 0), min(r1 + margin, H)), slice(max(c0 - margin, 0), min(c1 + margin, W)))
 
 
 def classify(log_odds: np.ndarray, observed: BoolGrid, sensor: SensorConfig) -> StateGrid:

@@ -156,6 +156,7 @@ class ExplorationSim:
             robot_new, team_new = apply_scan(
                 self._mark[i], window, b.log_odds, b.observed, self.team_observed, self.explorable, *self._l
             )
+            b.note_window(window)
             self.robot_known_cells[i] += robot_new
             self.known_cells += team_new
 
