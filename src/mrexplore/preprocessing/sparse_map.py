@@ -143,8 +143,9 @@ def sparse_frontier_map(
     >>> m = sparse_frontier_map(g, 0, 0, (2, 2))
     >>> len(m.cells), m.seeds.tolist()  # 8 boundary cells around one interior cell, the robot's
     (8, [12])
-    >>> w = sparse_frontier_map(g[1:, 1:], 0, 0, (2, 2), origin_rc=(1, 1), shape=(5, 5))
-    >>> w == m  # the same message from a window
+    >>> big = np.full((7, 7), O, np.uint8); big[2:5, 2:5] = F
+    >>> whole = sparse_frontier_map(big, 0, 0, (3, 3))
+    >>> sparse_frontier_map(big[1:6, 1:6], 0, 0, (3, 3), origin_rc=(1, 1), shape=(7, 7)) == whole
     True
     """
     shape = state.shape if shape is None else shape
