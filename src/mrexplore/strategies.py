@@ -17,7 +17,7 @@ from mrexplore.global_planning.oracle import plan_oracle_routes
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem, GlobalPlanner
 from mrexplore.local_planning.router import LocalRouter
 from mrexplore.maps.ground_truth import GroundTruthMap, explorable_region
-from mrexplore.paths.distance_field import descend_path, distance_fields, distances_at
+from mrexplore.paths.distance_field import descend_path, distance_fields, distance_matrix, distances_at
 from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers
 from mrexplore.preprocessing.frontiers import Frontiers, detect_frontiers
 from mrexplore.types import BoolGrid, CellState, MrExploreError, StateGrid
@@ -226,7 +226,7 @@ class CoScanPipeline(ExplorationPipeline):
         if len(keep) == 0:
             return _ended(state, frontiers, Clusters.empty(), n, "no_reachable_frontiers")
         tasks, d_robots = tasks[keep], d_robots[:, keep]
-        d_tasks = np.stack([distances_at(f, tasks) for f in distance_fields(passable, tasks)])
+        d_tasks = distance_matrix(passable, tasks, tasks)
         d_tasks = np.minimum(d_tasks, d_tasks.T)  # equal up to float rounding; keep it symmetric
         lloyd = lloyd_clusters(tasks, d_tasks, d_robots, self.coscan.delta_m / resolution_m, self.coscan.max_iterations)
         sizes = np.bincount(lloyd.labels, minlength=len(lloyd.centroids)).astype(np.int32)

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from mrexplore.paths.astar import astar_path, path_length_cells
-from mrexplore.paths.distance_field import distance_field
+from mrexplore.paths.distance_field import distance_field, distance_fields, distance_matrix, distances_at
 
 
 def reference_dijkstra(passable: np.ndarray, src: tuple[int, int]) -> np.ndarray:
@@ -95,3 +95,16 @@ def test_astar_is_optimal_and_valid(passable: np.ndarray, data: st.DataObject) -
         if dr and dc:
             assert passable[r, c + dc] and passable[r + dr, c]
     assert path_length_cells(path) == pytest.approx(ref)
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.integers(0, 10**6))
+def test_distance_matrix_equals_fields_read_at_targets(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    passable = rng.random((int(rng.integers(2, 25)), int(rng.integers(2, 25)))) < 0.7
+    passable[0, :] = False  # a box smaller than the grid
+    cells = np.argwhere(np.ones_like(passable))
+    sources = cells[rng.integers(0, len(cells), 4)]
+    targets = cells[rng.integers(0, len(cells), 6)]
+    expected = np.stack([distances_at(f, targets) for f in distance_fields(passable, sources)])
+    np.testing.assert_array_equal(distance_matrix(passable, sources, targets), expected)

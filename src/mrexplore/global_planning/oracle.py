@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
 from mrexplore.global_planning.tours import open_tour, split_tour
-from mrexplore.paths.distance_field import distance_fields, distances_at
+from mrexplore.paths.distance_field import distance_fields, distance_matrix, distances_at
 from mrexplore.sim.lidar import ray_count, ray_directions, scan_mark
 from mrexplore.types import BoolGrid
 
@@ -31,7 +31,8 @@ def viewpoint_footprints(
     range_cells: float,
     ray_oversampling: float,
 ) -> tuple[list[NDArray[np.int32]], int]:
-    """For each candidate, the ids of the ``targets`` cells its scan marks; and the number of targets."""
+    """For each candidate, the ids of the ``targets`` cells its scan marks (each once); and the number of
+    targets."""
     target_id = np.full(targets.shape, -1, dtype=np.int64)
     target_id[targets] = np.arange(int(targets.sum()))
     dirs = ray_directions(ray_count(range_cells, ray_oversampling))
@@ -51,13 +52,15 @@ def viewpoint_footprints(
 def greedy_cover(footprints: list[NDArray[np.int32]], n_targets: int) -> list[int]:
     """Candidates picked greedily (most unseen targets first, lowest index on ties) until none adds any.
 
+    ``footprints``: per candidate, the distinct targets it covers.
+
     Examples
     --------
     >>> greedy_cover([np.array([0, 1]), np.array([1, 2, 3]), np.array([3])], 4)
     [1, 0]
     """
     seen = np.zeros(n_targets, dtype=bool)
-    gains = np.array([len(np.unique(f)) for f in footprints], dtype=np.int64)
+    gains = np.array([len(f) for f in footprints], dtype=np.int64)  # a footprint lists each cell once
     picked: list[int] = []
     while len(gains) and gains.max() > 0:
         # Lazy greedy: a stale gain is an upper bound; recompute the best until it stays best.
@@ -106,8 +109,7 @@ def plan_oracle_routes(
     if len(chosen) == 0:
         return OraclePlan(chosen, [np.zeros((0, 2), np.int32) for _ in range(n)])
     d_start = np.minimum.reduce([distances_at(f, chosen) for f in start_fields])
-    fields = distance_fields(free, chosen)
-    d = np.stack([distances_at(f, chosen) for f in fields])
+    d = distance_matrix(free, chosen, chosen)
     d = np.minimum(d, d.T)
     full = np.zeros((len(chosen) + 1, len(chosen) + 1))
     full[0, 1:] = full[1:, 0] = d_start

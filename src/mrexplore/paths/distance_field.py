@@ -20,7 +20,7 @@ from mrexplore.paths.moves import DC, DR, move_cost
 from mrexplore.threads import map_threads
 from mrexplore.types import BoolGrid, GridRC
 
-__all__ = ["distance_field", "distance_fields", "distances_at", "descend_path"]
+__all__ = ["distance_field", "distance_fields", "distance_matrix", "distances_at", "descend_path"]
 
 
 @nb.njit(cache=True, nogil=True)
@@ -112,8 +112,17 @@ def distance_field(passable: BoolGrid, source_rc: GridRC) -> NDArray[np.float32]
     return _two_queue_dijkstra(np.ascontiguousarray(passable), int(source_rc[0]), int(source_rc[1]))
 
 
+def _passable_box(passable: BoolGrid) -> tuple[int, int, int, int] | None:
+    """``(r0, r1, c0, c1)`` half-open bounding box of the passable cells; None when there are none."""
+    rows = np.flatnonzero(passable.any(axis=1))
+    if len(rows) == 0:
+        return None
+    cols = np.flatnonzero(passable.any(axis=0))
+    return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
+
+
 def distance_fields(passable: BoolGrid, sources_rc: NDArray[np.integer]) -> list[NDArray[np.float32]]:
-    """One :func:`distance_field` per source, computed on the passable bounding box, on all cores.
+    """One :func:`distance_field` per source, computed on the passable bounding box, on the shared threads.
 
     Returns
     -------
@@ -121,11 +130,10 @@ def distance_fields(passable: BoolGrid, sources_rc: NDArray[np.integer]) -> list
     """
     if passable.dtype != np.bool_:
         passable = passable.astype(bool)
-    rows = np.flatnonzero(passable.any(axis=1))
-    if len(rows) == 0:
+    box = _passable_box(passable)
+    if box is None:
         return [np.full(passable.shape, np.inf, dtype=np.float32) for _ in range(len(sources_rc))]
-    cols = np.flatnonzero(passable.any(axis=0))
-    r0, r1, c0, c1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
+    r0, r1, c0, c1 = box
     crop = np.ascontiguousarray(passable[r0:r1, c0:c1])
 
     def one(src: NDArray[np.integer]) -> NDArray[np.float32]:
@@ -136,6 +144,45 @@ def distance_fields(passable: BoolGrid, sources_rc: NDArray[np.integer]) -> list
         return out
 
     return map_threads(one, list(sources_rc))  # the kernel releases the GIL
+
+
+def distance_matrix(
+    passable: BoolGrid, sources_rc: NDArray[np.integer], targets_rc: NDArray[np.integer]
+) -> NDArray[np.float64]:
+    """Geodesic distances from every source to every target, ``(n_sources, n_targets) float64`` in cells
+    (``inf`` where unreachable): :func:`distance_fields` read at the targets, without building a whole-map
+    field per source (on a large map, filling those cost more than the searches).
+
+    Examples
+    --------
+    >>> g = np.ones((3, 3), bool); g[1, 1] = False
+    >>> distance_matrix(g, np.array([[0, 0]]), np.array([[0, 2], [2, 2], [1, 1]])).tolist()
+    [[2.0, 4.0, inf]]
+    """
+    if passable.dtype != np.bool_:
+        passable = passable.astype(bool)
+    sources = np.asarray(sources_rc, dtype=np.int64).reshape(-1, 2)
+    targets = np.asarray(targets_rc, dtype=np.int64).reshape(-1, 2)
+    out = np.full((len(sources), len(targets)), np.inf)
+    box = _passable_box(passable)
+    if box is None or len(targets) == 0:
+        return out
+    r0, r1, c0, c1 = box
+    crop = np.ascontiguousarray(passable[r0:r1, c0:c1])
+    tr, tc = targets[:, 0] - r0, targets[:, 1] - c0
+    inside = (tr >= 0) & (tr < crop.shape[0]) & (tc >= 0) & (tc < crop.shape[1])
+
+    def row(src: NDArray[np.int64]) -> NDArray[np.float64]:
+        d = np.full(len(targets), np.inf)
+        r, c = int(src[0]) - r0, int(src[1]) - c0
+        if 0 <= r < crop.shape[0] and 0 <= c < crop.shape[1]:
+            d[inside] = _two_queue_dijkstra(crop, r, c)[tr[inside], tc[inside]]
+        return d
+
+    rows = map_threads(row, list(sources))
+    if rows:
+        out[:] = np.stack(rows)
+    return out
 
 
 @nb.njit(cache=True, nogil=True)
