@@ -19,6 +19,7 @@ def row(strategy: str, steps: int, cls: str = "small", **extra: str) -> dict[str
         "bytes_sparse_delta": "500",
         "reconstruction_iou_min": "0.99",
         "reconstruction_iou_mean": "0.999",
+        "done_reason": "no_frontiers",
     }
     return base | extra
 
@@ -30,6 +31,18 @@ def test_improvement_is_against_the_best_other_strategy_not_yardsticks() -> None
     assert table[2] == "| hier | 100.00 | 90.0 ± 10.0 | +10.0 |"
     assert table[3] == "| utility | 100.00 | 100.0 ± 0.0 | -11.1 |"
     assert table[5] == "| oracle | 100.00 | 40.0 ± 0.0 | +55.6 |"
+
+
+def test_budget_cut_episodes_counted_and_tables_by_dataset() -> None:
+    rows = [
+        row("hier", 2000, done_reason="max_steps", coverage="0.5"),
+        row("hier", 1000),
+        row("hier", 300, dataset="kth", cls="large"),
+    ]
+    by_class = steps_table(rows, ["hier"]).splitlines()
+    assert by_class[2] == "| hier | 75.00 | 1500.0 ± 500.0 (1 cut) | – | 100.00 | 300.0 ± 0.0 | – |"
+    by_dataset = steps_table(rows, ["hier"], key="dataset").splitlines()
+    assert by_dataset[0].startswith("| strategy | houseexpo small cov. % |") and "kth large steps" in by_dataset[0]
 
 
 def test_bytes_table_reductions() -> None:

@@ -34,26 +34,33 @@ def _mean_std(values: list[float]) -> str:
     return f"{a.mean():.1f} ± {a.std():.1f}" if len(a) else "–"
 
 
-def _steps(rows: list[Row], strategy: str, cls: str) -> list[float]:
-    return [float(r["steps"]) for r in rows if r["strategy"] == strategy and r["size_class"] == cls]
+def _steps(rows: list[Row], strategy: str, cls: str, key: str = "size_class") -> list[float]:
+    return [float(r["steps"]) for r in rows if r["strategy"] == strategy and _key(r, key) == cls]
 
 
-def steps_table(rows: list[Row], strategies: Sequence[str]) -> str:
-    """Table I: per size class and strategy, coverage %, steps mean ± std, and the improvement in mean
+def _key(row: Row, key: str) -> str:
+    return f"{row['dataset']} {row['size_class']}" if key == "dataset" else row[key]
+
+
+def steps_table(rows: list[Row], strategies: Sequence[str], key: str = "size_class") -> str:
+    """Table I: per size class (``key="dataset"``: per dataset and size class) and strategy, coverage %,
+    steps mean ± std with the number of episodes the step budget cut short, and the improvement in mean
     steps over the best other (non-yardstick) strategy, in % (positive: fewer steps)."""
-    classes = _classes(rows)
+    classes = [f"{d} {c}" for d, c in _groups(rows)] if key == "dataset" else _classes(rows)
     head = "| strategy | " + " | ".join(f"{c} cov. % | {c} steps | {c} impr. %" for c in classes) + " |"
     lines = [head, "|" + " --- |" * (1 + 3 * len(classes))]
     for s in strategies:
         cells = []
         for c in classes:
-            sel = [r for r in rows if r["strategy"] == s and r["size_class"] == c]
+            sel = [r for r in rows if r["strategy"] == s and _key(r, key) == c]
             cov = [100 * float(r["coverage"]) for r in sel]
-            others = [np.mean(_steps(rows, o, c)) for o in strategies if o != s and o not in YARDSTICKS]
+            others = [np.mean(_steps(rows, o, c, key)) for o in strategies if o != s and o not in YARDSTICKS]
             others = [v for v in others if np.isfinite(v)]
-            mine = np.mean(_steps(rows, s, c)) if sel else np.nan
+            mine = np.mean(_steps(rows, s, c, key)) if sel else np.nan
             impr = f"{100 * (min(others) - mine) / min(others):+.1f}" if others and sel else "–"
-            cells += [f"{np.mean(cov):.2f}" if cov else "–", _mean_std(_steps(rows, s, c)), impr]
+            cut = sum(r["done_reason"] == "max_steps" for r in sel)
+            steps = _mean_std(_steps(rows, s, c, key)) + (f" ({cut} cut)" if cut else "")
+            cells += [f"{np.mean(cov):.2f}" if cov else "–", steps, impr]
         lines.append(f"| {s} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -229,8 +236,12 @@ def write_report(results_csv: Path, report_md: Path, strategies: Sequence[str], 
             "Steps: mean ± std over maps and seeds; coverage: mean; improvement: against the best other "
             f"strategy's mean steps in the class (yardsticks {', '.join(sorted(YARDSTICKS))} excluded).",
             "## Table I: coverage and steps by size class",
+            'An episode the step budget cut short ("cut") counts with the budget as its steps and the '
+            "coverage it reached by then.",
             steps_table(rows, strategies),
             *pictures,
+            "## Table I by dataset",
+            steps_table(rows, strategies, key="dataset"),
             "## Table II: bytes sent per episode, robots to centre",
             "Grid: each robot's int8 occupancy grid over its known bounding box every round (the paper's "
             "baseline); sparse: the frontier maps of IV-A; delta: changes since the last acknowledged map. "
