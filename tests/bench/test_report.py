@@ -41,6 +41,8 @@ def test_budget_cut_episodes_counted_and_tables_by_dataset() -> None:
     ]
     by_class = steps_table(rows, ["hier"]).splitlines()
     assert by_class[2] == "| hier | 75.00 | 1500.0 ± 500.0 (1 cut) | – | 100.00 | 300.0 ± 0.0 | – |"
+    all_cut = [row("hier", 2000, done_reason="max_steps"), row("utility", 2000, done_reason="max_steps")]
+    assert steps_table(all_cut, ["hier", "utility"]).splitlines()[2] == "| hier | 100.00 | 2000.0 ± 0.0 (1 cut) | – |"
     by_dataset = steps_table(rows, ["hier"], key="dataset").splitlines()
     assert by_dataset[0].startswith("| strategy | houseexpo small cov. % |") and "kth large steps" in by_dataset[0]
 

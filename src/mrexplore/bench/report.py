@@ -57,8 +57,10 @@ def steps_table(rows: list[Row], strategies: Sequence[str], key: str = "size_cla
             others = [np.mean(_steps(rows, o, c, key)) for o in strategies if o != s and o not in YARDSTICKS]
             others = [v for v in others if np.isfinite(v)]
             mine = np.mean(_steps(rows, s, c, key)) if sel else np.nan
-            impr = f"{100 * (min(others) - mine) / min(others):+.1f}" if others and sel else "–"
             cut = sum(r["done_reason"] == "max_steps" for r in sel)
+            # Where the budget cut every episode, steps say nothing (coverage does).
+            ok = others and sel and cut < len(sel)
+            impr = f"{100 * (min(others) - mine) / min(others):+.1f}" if ok else "–"
             steps = _mean_std(_steps(rows, s, c, key)) + (f" ({cut} cut)" if cut else "")
             cells += [f"{np.mean(cov):.2f}" if cov else "–", steps, impr]
         lines.append(f"| {s} | " + " | ".join(cells) + " |")
