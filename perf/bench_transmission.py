@@ -59,11 +59,15 @@ def main() -> int:
     def observe(sim, decision, goals) -> None:
         if sim.steps % args.every:
             return
+        size = strategy.preprocess.closing_size_cells
         for i, belief in enumerate(sim.beliefs):
-            closed = close_unknown_holes(belief.state(sim.cfg.sensor), strategy.preprocess.closing_size_cells)
+            closed = close_unknown_holes(belief.state(sim.cfg.sensor), size)
             pos = (int(sim.positions_rc[i, 0]), int(sim.positions_rc[i, 1]))
+            # As the robots do in TeamLink: the message built on the box of the robot's observed cells.
+            window = belief.window(2 * (size // 2) + 2)
+            origin = (window[0].start, window[1].start)
             t0 = time.perf_counter()
-            data = encode(sparse_frontier_map(closed, i, sim.steps, pos))
+            data = encode(sparse_frontier_map(closed[window], i, sim.steps, pos, origin, closed.shape))
             t1 = time.perf_counter()
             message = decode(data)
             t2 = time.perf_counter()
