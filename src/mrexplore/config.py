@@ -243,7 +243,7 @@ class MissionConfig:
     """A decision asked for by a robot whose goal stopped being a frontier waits until this many steps have
     passed since the last one (the robot drives on meanwhile), steps, >= 1 (1: at once). A robot left with
     no path, or a blocked one, is served at once. Replanning at once made teams chase goals that vanish as
-    they come into view: 20-37% more steps for hier, nearest and utility on 20 maps, 3-7 times the time."""
+    they come into view: 18-37% more steps for hier, nearest and utility on 20 maps, 2.7-7.7 times the time."""
     transmission: str = "delta"
     """What the centre rebuilds its grid from: ``delta`` (changes since the last acknowledged sparse
     frontier map) or ``full`` (the whole sparse map every round, the paper's). Same grid, fewer bytes."""
