@@ -16,6 +16,7 @@ from PIL import Image
 from mrexplore.bench.runner import (
     COLUMNS,
     EpisodeSpec,
+    _area_hint,
     dataset_of,
     expand_maps,
     parse_curve,
@@ -89,6 +90,17 @@ def test_resume_after_kill_loses_nothing(tmp_path) -> None:
     after = read_rows(out / "results.csv")
     assert len(after) == 6 and after[: len(before)] == before
     assert len({(r["map"], r["seed"]) for r in after}) == 6
+
+
+def test_area_hint_from_image_headers(tmp_path) -> None:
+    # The area hint from image headers: 20 x 20 px at 1 m (YAML) = 400 m^2; 50 x 50 px at the loader's
+    # 0.1 m default = 25 m^2; unknown formats 0. The runner starts the largest first.
+    Image.fromarray(np.zeros((20, 20), np.uint8)).save(tmp_path / "big.png")
+    (tmp_path / "big.yaml").write_text("image: big.png\nresolution: 1.0\n")
+    Image.fromarray(np.zeros((50, 50), np.uint8)).save(tmp_path / "small.png")
+    assert _area_hint(str(tmp_path / "big.yaml")) == 400.0
+    assert _area_hint(str(tmp_path / "small.png")) == pytest.approx(25.0)
+    assert _area_hint("generated:0") == 0.0
 
 
 def test_expand_maps_skips_label_images_and_yaml_images(tmp_path) -> None:
