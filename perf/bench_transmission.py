@@ -22,7 +22,7 @@ from scipy import ndimage
 from mrexplore.config import MissionConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import run_mission
-from mrexplore.preprocessing.frontiers import close_unknown_holes
+from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
 from mrexplore.preprocessing.reconstruction import fill_paper, free_iou, reconstruct
 from mrexplore.preprocessing.sparse_codec import decode, encode
 from mrexplore.preprocessing.sparse_map import sparse_frontier_map
@@ -64,7 +64,7 @@ def main() -> int:
             closed = close_unknown_holes(belief.state(sim.cfg.sensor), size)
             pos = (int(sim.positions_rc[i, 0]), int(sim.positions_rc[i, 1]))
             # As the robots do in TeamLink: the message built on the box of the robot's observed cells.
-            window = belief.window(2 * (size // 2) + 2)
+            window = belief.window(closing_reach(size) + 1)
             origin = (window[0].start, window[1].start)
             t0 = time.perf_counter()
             data = encode(sparse_frontier_map(closed[window], i, sim.steps, pos, origin, closed.shape))

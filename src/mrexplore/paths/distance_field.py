@@ -16,6 +16,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
+from mrexplore.boxes import mask_box
 from mrexplore.paths.moves import DC, DR, move_cost
 from mrexplore.threads import map_threads
 from mrexplore.types import BoolGrid, GridRC
@@ -112,13 +113,14 @@ def distance_field(passable: BoolGrid, source_rc: GridRC) -> NDArray[np.float32]
     return _two_queue_dijkstra(np.ascontiguousarray(passable), int(source_rc[0]), int(source_rc[1]))
 
 
-def _passable_box(passable: BoolGrid) -> tuple[int, int, int, int] | None:
-    """``(r0, r1, c0, c1)`` half-open bounding box of the passable cells; None when there are none."""
-    rows = np.flatnonzero(passable.any(axis=1))
-    if len(rows) == 0:
+def _crop(passable: BoolGrid) -> tuple[np.ndarray, int, int] | None:
+    """The passable cells' bounding box as a contiguous crop, with its first row and column; None when
+    nothing is passable."""
+    box = mask_box(passable)
+    if box is None:
         return None
-    cols = np.flatnonzero(passable.any(axis=0))
-    return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
+    r0, r1, c0, c1 = box
+    return np.ascontiguousarray(passable[r0:r1, c0:c1]), r0, c0
 
 
 def distance_fields(passable: BoolGrid, sources_rc: NDArray[np.integer]) -> list[NDArray[np.float32]]:
@@ -130,11 +132,11 @@ def distance_fields(passable: BoolGrid, sources_rc: NDArray[np.integer]) -> list
     """
     if passable.dtype != np.bool_:
         passable = passable.astype(bool)
-    box = _passable_box(passable)
-    if box is None:
+    cropped = _crop(passable)
+    if cropped is None:
         return [np.full(passable.shape, np.inf, dtype=np.float32) for _ in range(len(sources_rc))]
-    r0, r1, c0, c1 = box
-    crop = np.ascontiguousarray(passable[r0:r1, c0:c1])
+    crop, r0, c0 = cropped
+    r1, c1 = r0 + crop.shape[0], c0 + crop.shape[1]
 
     def one(src: NDArray[np.integer]) -> NDArray[np.float32]:
         out = np.full(passable.shape, np.inf, dtype=np.float32)
@@ -164,11 +166,10 @@ def distance_matrix(
     sources = np.asarray(sources_rc, dtype=np.int64).reshape(-1, 2)
     targets = np.asarray(targets_rc, dtype=np.int64).reshape(-1, 2)
     out = np.full((len(sources), len(targets)), np.inf)
-    box = _passable_box(passable)
-    if box is None or len(targets) == 0:
+    cropped = _crop(passable)
+    if cropped is None or len(targets) == 0:
         return out
-    r0, r1, c0, c1 = box
-    crop = np.ascontiguousarray(passable[r0:r1, c0:c1])
+    crop, r0, c0 = cropped
     tr, tc = targets[:, 0] - r0, targets[:, 1] - c0
     inside = (tr >= 0) & (tr < crop.shape[0]) & (tc >= 0) & (tc < crop.shape[1])
 

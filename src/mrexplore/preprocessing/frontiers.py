@@ -7,9 +7,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from mrexplore.boxes import grown_slices, mask_box
 from mrexplore.types import BoolGrid, CellState, StateGrid
 
-__all__ = ["Frontiers", "close_unknown_holes", "detect_frontiers", "FOUR_NEIGHBOUR_KERNEL"]
+__all__ = ["Frontiers", "close_unknown_holes", "closing_reach", "detect_frontiers", "FOUR_NEIGHBOUR_KERNEL"]
 
 FOUR_NEIGHBOUR_KERNEL = np.array([[0, 1, 0], [1, 0, 1], [0, 1, 0]], dtype=np.uint8)
 """The paper's neighbourhood: g(i-1,j), g(i+1,j), g(i,j-1), g(i,j+1)."""
@@ -71,18 +72,16 @@ def close_unknown_holes(state: StateGrid, size_cells: int) -> StateGrid:
     return out
 
 
+def closing_reach(size_cells: int) -> int:
+    """Cells beyond free space that a closing of ``size_cells`` reads (2 * radius + 1): grids cropped to
+    the free cells' box grown by this much close exactly as the whole grid does."""
+    return 2 * (size_cells // 2) + 1
+
+
 def _known_box(mask: BoolGrid, size_cells: int) -> tuple[slice, slice] | None:
-    """The bounding box of ``mask`` grown by the closing's reach (2 * radius + 1), clipped to the grid."""
-    rows = np.flatnonzero(mask.any(axis=1))
-    if len(rows) == 0:
-        return None
-    cols = np.flatnonzero(mask.any(axis=0))
-    pad = 2 * (size_cells // 2) + 1
-    H, W = mask.shape
-    return (
-        slice(max(rows[0] - pad, 0), min(rows[-1] + 1 + pad, H)),
-        slice(max(cols[0] - pad, 0), min(cols[-1] + 1 + pad, W)),
-    )
+    """The bounding box of ``mask`` grown by the closing's reach, clipped to the grid."""
+    box = mask_box(mask)
+    return None if box is None else grown_slices(box, closing_reach(size_cells), mask.shape)
 
 
 def _box_dilate(mask: BoolGrid, r: int) -> BoolGrid:

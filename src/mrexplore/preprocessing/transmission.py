@@ -20,8 +20,9 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from mrexplore.boxes import mask_box
 from mrexplore.config import PreprocessConfig, SensorConfig
-from mrexplore.preprocessing.frontiers import close_unknown_holes
+from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
 from mrexplore.preprocessing.reconstruction import CentreMap, free_iou
 from mrexplore.preprocessing.sparse_codec import HEADER, decode, encode
 from mrexplore.preprocessing.sparse_map import FULL, SparseFrontierMap, changed_since, sparse_frontier_map
@@ -46,12 +47,10 @@ def occupancy_grid_bytes(state: StateGrid) -> tuple[int, int]:
     >>> raw - HEADER.size  # a 2 x 5 box
     10
     """
-    known = state != CellState.UNKNOWN
-    if not known.any():
+    known = mask_box(state != CellState.UNKNOWN)
+    if known is None:
         return HEADER.size, HEADER.size
-    rows = np.flatnonzero(known.any(axis=1))
-    cols = np.flatnonzero(known.any(axis=0))
-    box = state[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]
+    box = state[known[0] : known[1], known[2] : known[3]]
     lut = np.zeros(len(CellState), dtype=np.int8)
     for s, v in _ROS_VALUES.items():
         lut[s] = v
@@ -161,7 +160,7 @@ class TeamLink:
         robot_s = 0.0
         # A robot works on the box of its observed cells, grown by the closing's reach plus one cell: the
         # closing, the codes and the seeds there equal those of the whole grid (nothing beyond is free).
-        margin = 2 * (self.preprocess.closing_size_cells // 2) + 2
+        margin = closing_reach(self.preprocess.closing_size_cells) + 1
         for i, belief in enumerate(beliefs):
             t0 = time.perf_counter()
             window = belief.window(margin)

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mrexplore.boxes import Box, grown_slices
 from mrexplore.config import SensorConfig
 from mrexplore.types import BoolGrid, CellState, StateGrid
 
@@ -34,7 +35,7 @@ class Belief:
 
     log_odds: np.ndarray
     observed: BoolGrid
-    box: tuple[int, int, int, int] | None = None
+    box: Box | None = None
     """``(r0, r1, c0, c1)`` half-open rows and columns holding every observed cell; None: none observed."""
 
     @classmethod
@@ -45,7 +46,7 @@ class Belief:
         """Three-state view, ``(H, W) uint8`` of :class:`CellState`."""
         return classify(self.log_odds, self.observed, sensor)
 
-    def note_window(self, window: tuple[int, int, int, int]) -> None:
+    def note_window(self, window: Box) -> None:
         """Grow :attr:`box` by a scan's window ``(r0, r1, c0, c1)``."""
         r0, r1, c0, c1 = window
         if self.box is not None:
@@ -63,10 +64,7 @@ class Belief:
         (slice(2, 8, None), slice(0, 5, None))
         """
         H, W = self.observed.shape
-        if self.box is None:
-            return (slice(0, H), slice(0, W))
-        r0, r1, c0, c1 = self.box
-        return (slice(max(r0 - margin, 0), min(r1 + margin, H)), slice(max(c0 - margin, 0), min(c1 + margin, W)))
+        return grown_slices(self.box if self.box is not None else (0, H, 0, W), margin, (H, W))
 
 
 def classify(log_odds: np.ndarray, observed: BoolGrid, sensor: SensorConfig) -> StateGrid:

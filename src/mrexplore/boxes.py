@@ -1,0 +1,45 @@
+"""Bounding boxes on the grid: where a mask's cells lie, grown by a margin and clipped to the grid.
+
+Work on large maps is kept to the part that matters (the free cells, a robot's observed cells, the
+passable ones) by cropping to such a box.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mrexplore.types import BoolGrid
+
+__all__ = ["Box", "mask_box", "grown_slices"]
+
+Box = tuple[int, int, int, int]
+"""``(r0, r1, c0, c1)``: half-open rows and columns."""
+
+
+def mask_box(mask: BoolGrid) -> Box | None:
+    """The bounding box of the True cells of ``mask``; None when there are none.
+
+    Examples
+    --------
+    >>> m = np.zeros((5, 6), bool); m[1, 2] = m[3, 4] = True
+    >>> mask_box(m)
+    (1, 4, 2, 5)
+    """
+    rows = np.flatnonzero(mask.any(axis=1))
+    if len(rows) == 0:
+        return None
+    cols = np.flatnonzero(mask.any(axis=0))
+    return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
+
+
+def grown_slices(box: Box, margin: int, shape: tuple[int, int]) -> tuple[slice, slice]:
+    """``box`` grown by ``margin`` cells on every side and clipped to a grid of ``shape``, as slices.
+
+    Examples
+    --------
+    >>> grown_slices((4, 6, 2, 3), 2, (10, 10))
+    (slice(2, 8, None), slice(0, 5, None))
+    """
+    r0, r1, c0, c1 = box
+    H, W = shape
+    return slice(max(r0 - margin, 0), min(r1 + margin, H)), slice(max(c0 - margin, 0), min(c1 + margin, W))
