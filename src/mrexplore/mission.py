@@ -11,6 +11,7 @@ paper's: no cluster of the minimum size left, or none reachable; or when the ste
 
 from __future__ import annotations
 
+import copy
 import sys
 import time
 from collections.abc import Callable
@@ -21,16 +22,17 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from mrexplore.config import MissionConfig, SimConfig
+from mrexplore.global_planning.protocol import Assignment, AssignmentProblem
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.paths.astar import astar_path
 from mrexplore.preprocessing.transmission import TeamLink
 from mrexplore.sim.measures import EpisodeMeasures, lower_bound_steps
 from mrexplore.sim.starts import draw_starts
-from mrexplore.sim.world import ExplorationSim
-from mrexplore.strategies import NO_GOAL, Decision, ExplorationPipeline
+from mrexplore.sim.world import ExplorationSim, StepResult
+from mrexplore.strategies import NO_GOAL, Decision, ExplorationPipeline, PosedDecision
 from mrexplore.types import CellState, MrExploreError
 
-__all__ = ["MissionResult", "run_mission", "Observer"]
+__all__ = ["Mission", "MissionResult", "MissionSnapshot", "run_mission", "Observer"]
 
 Observer = Callable[[ExplorationSim, Decision | None, NDArray[np.int32]], None]
 """Called after the first scan and after every step with the sim, the latest decision and the goals."""
@@ -59,6 +61,278 @@ def _goal_still_frontier(team_observed: np.ndarray, goal: NDArray[np.int32]) -> 
     return False
 
 
+@dataclass(frozen=True)
+class MissionSnapshot:
+    """A mission's whole state at one moment (simulator, link, centre, routes, generator), to try
+    something forward and come back (:meth:`Mission.snapshot`, :meth:`Mission.restore`)."""
+
+    state: dict[str, object] = field(repr=False)
+
+
+_NOT_COPIED = ("strategy", "observer", "_bar", "truth")
+"""Shared, read-only during a mission (the ground truth) or owned by the caller: never snapshotted."""
+
+
+class Mission:
+    """One exploration mission that can be stepped decision by decision.
+
+    The one replanning loop of the package: :func:`run_mission`, the trainer's rollouts, the lookahead
+    expert and ``perf/`` all drive this object. :meth:`advance` runs simulation steps until the team needs
+    a decision (True) or the mission ends (False); the decision is then taken whole by :meth:`decide`,
+    or in two halves, :meth:`pose` (the centre's problem) and :meth:`commit` (any assignment), which is
+    how a learned planner is trained.
+
+    Examples
+    --------
+    >>> from mrexplore.config import MapConfig
+    >>> from mrexplore.maps.loaders import load_map
+    >>> from mrexplore.strategies import make_strategy
+    >>> truth = load_map("generated:0", MapConfig(resolution_m=0.2))
+    >>> m = Mission(truth, make_strategy("utility"), seed=0, progress=False)
+    >>> while m.advance():
+    ...     decision = m.decide()
+    >>> m.done_reason in ("no_frontiers", "no_reachable_frontiers", "max_steps")
+    True
+    """
+
+    def __init__(
+        self,
+        truth: GroundTruthMap,
+        strategy: ExplorationPipeline,
+        sim_cfg: SimConfig | None = None,
+        mission_cfg: MissionConfig | None = None,
+        seed: int = 0,
+        starts_rc: NDArray[np.integer] | None = None,
+        observer: Observer | None = None,
+        progress: bool | None = None,
+    ) -> None:
+        self.sim_cfg = sim_cfg = sim_cfg or SimConfig()
+        self.mission_cfg = mission_cfg = mission_cfg or MissionConfig()
+        self.truth = truth
+        self.strategy = strategy
+        self.observer = observer
+        self.rng = rng = np.random.default_rng(seed)
+        if starts_rc is None:
+            starts_rc = draw_starts(truth, sim_cfg.robots, sim_cfg.start_spread_m, rng)
+        starts_rc = np.asarray(starts_rc, dtype=np.int32)
+        if len(starts_rc) != sim_cfg.robots:
+            raise MrExploreError(f"starts must give one cell per robot ({sim_cfg.robots}), got {len(starts_rc)}")
+        self.starts_rc: NDArray[np.int32] = starts_rc
+        self._t0 = time.perf_counter()
+        strategy.prepare(truth, starts_rc, sim_cfg)
+        self.sim = sim = ExplorationSim(truth, starts_rc, sim_cfg, rng)
+        n = sim.n_robots
+        self.goals = np.tile(NO_GOAL, (n, 1))
+        self.blacklist = np.zeros(truth.shape, dtype=bool)
+        self.curve = [sim.coverage]
+        self.plan_ms: list[float] = []
+        self.last_decision_step = -mission_cfg.replan_every_steps
+        self.decision: Decision | None = None
+        # Every strategy plans on the grid the centre rebuilds from the robots' sparse frontier maps (IV-A).
+        self.link = TeamLink(n, truth.shape, strategy.preprocess, sim_cfg.sensor, mission_cfg.transmission)  # type: ignore[arg-type]
+        self.state = np.full(truth.shape, CellState.UNKNOWN, dtype=np.uint8)  # until the first round
+        self.done_reason: str | None = None
+        show = sys.stderr.isatty() if progress is None else progress
+        self._bar = tqdm(total=100, unit="%", desc=f"{strategy.name} {truth.name}", disable=not show, leave=False)
+        self.blocked = np.zeros(n, dtype=bool)
+        self.routes = [_NO_ROUTE] * n  # targets after the current goal
+        self.passable = self.state == CellState.FREE
+        self.reward_since_decision = 0.0
+        """Paper eq. 9 summed over the simulation steps since the last decision: R_time per step plus
+        lambda times the newly known explorable area, m^2."""
+        self._just_decided = False
+        self._posed: tuple[PosedDecision, float] | None = None
+        if observer:
+            observer(sim, None, self.goals)
+
+    # -- state -----------------------------------------------------------------------------------------
+    @property
+    def done(self) -> bool:
+        return self.done_reason is not None
+
+    @property
+    def steps(self) -> int:
+        return self.sim.steps
+
+    def snapshot(self) -> MissionSnapshot:
+        """Copy of everything a step or a decision changes (the strategy, observer and truth are shared)."""
+        if self._posed is not None:
+            raise MrExploreError("snapshot() between pose() and commit(); commit the posed decision first")
+        keep = {k: v for k, v in self.__dict__.items() if k not in _NOT_COPIED}
+        return MissionSnapshot(copy.deepcopy(keep))
+
+    def restore(self, snap: MissionSnapshot) -> None:
+        """Return to ``snap`` (which stays valid: it can be restored again)."""
+        self.__dict__.update(copy.deepcopy(snap.state))
+
+    # -- the loop ---------------------------------------------------------------------------------------
+    def _advance_route(self, i: int) -> bool:
+        """Move robot i on to the next target of its route; False when the route is used up."""
+        routes, sim = self.routes, self.sim
+        while len(routes[i]):
+            target, routes[i] = routes[i][0], routes[i][1:]
+            if self.strategy.goals_are_frontiers and (
+                self.blacklist[target[0], target[1]] or not _goal_still_frontier(sim.team_observed, target)
+            ):
+                continue
+            path = astar_path(self.passable, tuple(sim.positions_rc[i]), tuple(target))
+            if len(path):
+                self.goals[i] = target
+                sim.set_path(i, path)
+                return True
+        return False
+
+    def _needs_decision(self) -> bool:
+        """The replanning events (module docstring); moves robots on along their routes on the way."""
+        sim, goals, cfg = self.sim, self.goals, self.mission_cfg
+        frontier_goals = self.strategy.goals_are_frontiers
+        need = sim.steps - self.last_decision_step >= cfg.replan_every_steps
+        for i in range(sim.n_robots):
+            if goals[i, 0] < 0:
+                continue
+            reached = sim.at_path_end(i)
+            if (
+                frontier_goals
+                and reached
+                and np.array_equal(sim.positions_rc[i], goals[i])
+                and _goal_still_frontier(sim.team_observed, goals[i])
+            ):
+                self.blacklist[goals[i, 0], goals[i, 1]] = True  # stood on it and it stayed a frontier
+            if self.blocked[i] or sim.path_ahead_blocked(i):
+                need = True
+            elif reached:
+                need |= not self._advance_route(i)
+            elif (
+                frontier_goals
+                and sim.steps - self.last_decision_step >= cfg.min_replan_steps
+                and not _goal_still_frontier(sim.team_observed, goals[i])
+            ):
+                # Driving on towards a goal already seen costs little; a decision costs the whole team.
+                need |= not self._advance_route(i)
+        return need
+
+    def step(self) -> StepResult:
+        """One simulation step (no replanning check): drive, scan, record."""
+        result = self.sim.step()
+        self.blocked = result.blocked
+        self.curve.append(self.sim.coverage)
+        r = self.sim_cfg.reward
+        new_m2 = result.new_known_cells * self.truth.resolution_m**2
+        self.reward_since_decision += r.time_reward + r.area_weight * new_m2
+        self._bar.update(round(100 * self.sim.coverage) - self._bar.n)
+        if self.observer:
+            self.observer(self.sim, self.decision, self.goals)
+        return result
+
+    def advance(self) -> bool:
+        """Step until the team needs a decision (True) or the mission ends (False: budget spent or done)."""
+        while not self.done:
+            if self._just_decided:
+                self._just_decided = False  # the step right after a decision is never a replanning point
+            elif self._needs_decision():
+                return True
+            if self.sim.steps >= self.mission_cfg.max_steps:
+                self.done_reason = "max_steps"
+                break
+            self.step()
+        return False
+
+    def _current(self) -> list[NDArray[np.int32]]:
+        """Only goals still ahead and still bordering unknown space may hold their robot (hysteresis)."""
+        sim, goals, frontier_goals = self.sim, self.goals, self.strategy.goals_are_frontiers
+        return [
+            np.vstack([goals[i : i + 1], self.routes[i]])
+            if goals[i, 0] >= 0
+            and not sim.at_path_end(i)
+            and (not frontier_goals or _goal_still_frontier(sim.team_observed, goals[i]))
+            else (_NO_ROUTE if frontier_goals else self.routes[i])
+            for i in range(sim.n_robots)
+        ]
+
+    def decide(self) -> Decision:
+        """Take the pending decision with the strategy's own planner and apply it."""
+        t = time.perf_counter()
+        self.state = self.link.exchange(self.sim.beliefs, self.sim.positions_rc)
+        decision = self.strategy.decide(
+            self.state, self.sim.positions_rc.copy(), self.truth.resolution_m, self.blacklist, self._current()
+        )
+        # The centre's time: decoding, rebuilding and planning; the robots encode on board.
+        self.plan_ms.append((time.perf_counter() - t) * 1e3 - self.link.robot_ms)
+        self._apply(decision)
+        return decision
+
+    def pose(self) -> AssignmentProblem | None:
+        """First half of a decision: the centre's round and layer 1. Returns the problem a global planner
+        answers with :meth:`commit`, or None when the mission ended here (no frontier left or reachable)."""
+        t = time.perf_counter()
+        self.state = self.link.exchange(self.sim.beliefs, self.sim.positions_rc)
+        posed = self.strategy.pose(
+            self.state, self.sim.positions_rc.copy(), self.truth.resolution_m, self.blacklist, self._current()
+        )
+        ms = (time.perf_counter() - t) * 1e3 - self.link.robot_ms
+        if posed.problem is None:
+            self.plan_ms.append(ms)
+            self._apply(posed.final)  # type: ignore[arg-type]
+            return None
+        self._posed = (posed, ms)
+        return posed.problem
+
+    def commit(self, assignment: Assignment | None = None) -> Decision:
+        """Second half: finish the posed decision with ``assignment`` (None: the strategy's planner's)."""
+        if self._posed is None:
+            raise MrExploreError("commit() without a posed decision; call pose() first")
+        posed, ms = self._posed
+        self._posed = None
+        t = time.perf_counter()
+        problem = posed.problem
+        assert problem is not None
+        decision = self.strategy.finish(posed, assignment or self.strategy.planner.assign(problem))
+        self.plan_ms.append(ms + (time.perf_counter() - t) * 1e3)
+        self._apply(decision)
+        return decision
+
+    def _apply(self, decision: Decision) -> None:
+        self.last_decision_step = self.sim.steps
+        self.reward_since_decision = 0.0
+        self.decision = decision
+        if decision.done_reason is not None:
+            self.done_reason = decision.done_reason
+            return
+        self.goals = decision.goals_rc.copy()
+        self.passable = decision.state == CellState.FREE
+        for i in range(self.sim.n_robots):
+            self.sim.set_path(i, decision.paths[i])
+            self.routes[i] = decision.routes[i][1:]
+            if len(decision.paths[i]) == 0:
+                self.goals[i] = NO_GOAL
+        self._just_decided = True
+
+    def run(self) -> MissionResult:
+        """Run to the end with the strategy's own decisions."""
+        while self.advance():
+            self.decide()
+        return self.result()
+
+    def result(self) -> MissionResult:
+        """The measures of the mission so far (closes the progress bar)."""
+        self._bar.close()
+        truth, sim = self.truth, self.sim
+        measures = EpisodeMeasures.from_run(
+            np.asarray(self.curve),
+            sim.robot_coverage,
+            sim.path_len_m,
+            self.plan_ms,
+            time.perf_counter() - self._t0,
+            self.done_reason or "max_steps",
+            self.link.totals.as_measures(),
+            lower_bound_steps(~truth.occupied, sim.explorable, self.starts_rc, truth.resolution_m, self.sim_cfg),
+        )
+        return MissionResult(measures, np.asarray(self.curve), self.starts_rc.copy(), self.state, sim)
+
+
+_NO_ROUTE = np.zeros((0, 2), dtype=np.int32)
+
+
 def run_mission(
     truth: GroundTruthMap,
     strategy: ExplorationPipeline,
@@ -69,7 +343,7 @@ def run_mission(
     observer: Observer | None = None,
     progress: bool | None = None,
 ) -> MissionResult:
-    """Explore ``truth`` with ``strategy`` until done or out of budget.
+    """Explore ``truth`` with ``strategy`` until done or out of budget (a :class:`Mission` run whole).
 
     Parameters
     ----------
@@ -78,121 +352,4 @@ def run_mission(
     progress:
         Show a coverage bar; default: only when stderr is a terminal.
     """
-    sim_cfg = sim_cfg or SimConfig()
-    mission_cfg = mission_cfg or MissionConfig()
-    rng = np.random.default_rng(seed)
-    if starts_rc is None:
-        starts_rc = draw_starts(truth, sim_cfg.robots, sim_cfg.start_spread_m, rng)
-    starts_rc = np.asarray(starts_rc, dtype=np.int32)
-    if len(starts_rc) != sim_cfg.robots:
-        raise MrExploreError(f"starts must give one cell per robot ({sim_cfg.robots}), got {len(starts_rc)}")
-    t0 = time.perf_counter()
-    strategy.prepare(truth, starts_rc, sim_cfg)
-    sim = ExplorationSim(truth, starts_rc, sim_cfg, rng)
-    n = sim.n_robots
-    goals = np.tile(NO_GOAL, (n, 1))
-    blacklist = np.zeros(truth.shape, dtype=bool)
-    curve = [sim.coverage]
-    plan_ms: list[float] = []
-    last_decision_step = -mission_cfg.replan_every_steps
-    decision: Decision | None = None
-    # Every strategy plans on the grid the centre rebuilds from the robots' sparse frontier maps (IV-A).
-    link = TeamLink(n, truth.shape, strategy.preprocess, sim_cfg.sensor, mission_cfg.transmission)  # type: ignore[arg-type]
-    state = np.full(truth.shape, CellState.UNKNOWN, dtype=np.uint8)  # until the first round
-    done_reason = "max_steps"
-    show = sys.stderr.isatty() if progress is None else progress
-    bar = tqdm(total=100, unit="%", desc=f"{strategy.name} {truth.name}", disable=not show, leave=False)
-    blocked = np.zeros(n, dtype=bool)
-    no_route = np.zeros((0, 2), dtype=np.int32)
-    routes = [no_route] * n  # targets after the current goal
-    passable = state == CellState.FREE
-    frontier_goals = strategy.goals_are_frontiers
-
-    def advance(i: int) -> bool:
-        """Move robot i on to the next target of its route; False when the route is used up."""
-        while len(routes[i]):
-            target, routes[i] = routes[i][0], routes[i][1:]
-            if frontier_goals and (
-                blacklist[target[0], target[1]] or not _goal_still_frontier(sim.team_observed, target)
-            ):
-                continue
-            path = astar_path(passable, tuple(sim.positions_rc[i]), tuple(target))
-            if len(path):
-                goals[i] = target
-                sim.set_path(i, path)
-                return True
-        return False
-
-    if observer:
-        observer(sim, decision, goals)
-    while True:
-        need = sim.steps - last_decision_step >= mission_cfg.replan_every_steps
-        for i in range(n):
-            has_goal = goals[i, 0] >= 0
-            if not has_goal:
-                continue
-            reached = sim.at_path_end(i)
-            if (
-                frontier_goals
-                and reached
-                and np.array_equal(sim.positions_rc[i], goals[i])
-                and _goal_still_frontier(sim.team_observed, goals[i])
-            ):
-                blacklist[goals[i, 0], goals[i, 1]] = True  # stood on it and it stayed a frontier
-            if blocked[i] or sim.path_ahead_blocked(i):
-                need = True
-            elif reached:
-                need |= not advance(i)
-            elif (
-                frontier_goals
-                and sim.steps - last_decision_step >= mission_cfg.min_replan_steps
-                and not _goal_still_frontier(sim.team_observed, goals[i])
-            ):
-                # Driving on towards a goal already seen costs little; a decision costs the whole team.
-                need |= not advance(i)
-        if need:
-            t = time.perf_counter()
-            state = link.exchange(sim.beliefs, sim.positions_rc)
-            # Only goals still ahead and still bordering unknown space may hold their robot (hysteresis).
-            current = [
-                np.vstack([goals[i : i + 1], routes[i]])
-                if goals[i, 0] >= 0
-                and not sim.at_path_end(i)
-                and (not frontier_goals or _goal_still_frontier(sim.team_observed, goals[i]))
-                else (no_route if frontier_goals else routes[i])
-                for i in range(n)
-            ]
-            decision = strategy.decide(state, sim.positions_rc.copy(), truth.resolution_m, blacklist, current)
-            # The centre's time: decoding, rebuilding and planning; the robots encode on board.
-            plan_ms.append((time.perf_counter() - t) * 1e3 - link.robot_ms)
-            last_decision_step = sim.steps
-            if decision.done_reason is not None:
-                done_reason = decision.done_reason
-                break
-            goals = decision.goals_rc.copy()
-            passable = decision.state == CellState.FREE
-            for i in range(n):
-                sim.set_path(i, decision.paths[i])
-                routes[i] = decision.routes[i][1:]
-                if len(decision.paths[i]) == 0:
-                    goals[i] = NO_GOAL
-        if sim.steps >= mission_cfg.max_steps:
-            break
-        result = sim.step()
-        blocked = result.blocked
-        curve.append(sim.coverage)
-        bar.update(round(100 * sim.coverage) - bar.n)
-        if observer:
-            observer(sim, decision, goals)
-    bar.close()
-    measures = EpisodeMeasures.from_run(
-        np.asarray(curve),
-        sim.robot_coverage,
-        sim.path_len_m,
-        plan_ms,
-        time.perf_counter() - t0,
-        done_reason,
-        link.totals.as_measures(),
-        lower_bound_steps(~truth.occupied, sim.explorable, starts_rc, truth.resolution_m, sim_cfg),
-    )
-    return MissionResult(measures, np.asarray(curve), np.asarray(starts_rc, dtype=np.int32), state, sim)
+    return Mission(truth, strategy, sim_cfg, mission_cfg, seed, starts_rc, observer, progress).run()

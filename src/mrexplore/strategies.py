@@ -22,7 +22,15 @@ from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers
 from mrexplore.preprocessing.frontiers import Frontiers, detect_frontiers
 from mrexplore.types import BoolGrid, CellState, MrExploreError, StateGrid
 
-__all__ = ["Decision", "ExplorationPipeline", "STRATEGIES", "make_strategy", "strategy_names", "NO_GOAL"]
+__all__ = [
+    "Decision",
+    "PosedDecision",
+    "ExplorationPipeline",
+    "STRATEGIES",
+    "make_strategy",
+    "strategy_names",
+    "NO_GOAL",
+]
 
 NO_GOAL = np.array([-1, -1], dtype=np.int32)
 NO_LOCAL_SUFFIX = "-nolocal"
@@ -95,6 +103,44 @@ def _decision(
     return Decision(state, frontiers, clusters, assignment, goals, routes, paths, None)
 
 
+@dataclass(frozen=True)
+class _Posed:
+    """What layer 3 reuses from layer 1 and the distances of the same decision."""
+
+    frontiers: Frontiers
+    fields: list[NDArray[np.float32]]
+    passable: BoolGrid
+    kept: dict[int, tuple[int, NDArray[np.int32]]]
+
+
+@dataclass(frozen=True)
+class PosedDecision:
+    """A decision half taken: the problem for the global planner, or the mission's end.
+
+    Exactly one of ``problem`` and ``final`` is set. A trainer or an expert answers ``problem`` with any
+    :class:`~mrexplore.global_planning.protocol.Assignment` and hands it to
+    :meth:`ExplorationPipeline.finish`.
+    """
+
+    problem: AssignmentProblem | None
+    final: Decision | None
+    work: _Posed | None = field(default=None, repr=False)
+
+
+def _current_clusters(clusters: Clusters, current: Sequence[NDArray[np.int32]] | None, n: int) -> NDArray[np.int64]:
+    """``(n,) int64`` the cluster each robot's current goal is a member of; -1 for none."""
+    out = np.full(n, -1, dtype=np.int64)
+    if current is None or len(clusters.members_rc) == 0:
+        return out
+    m = clusters.members_rc
+    for i, route in enumerate(current):
+        if len(route):
+            hit = np.flatnonzero((m[:, 0] == route[0, 0]) & (m[:, 1] == route[0, 1]))
+            if len(hit):
+                out[i] = int(clusters.labels[hit[0]])
+    return out
+
+
 @dataclass
 class ExplorationPipeline:
     """A complete strategy: the centre's preprocessing, a global planner, and optionally local routing.
@@ -139,15 +185,15 @@ class ExplorationPipeline:
                 kept[i] = (k, route)
         return kept
 
-    def decide(
+    def pose(
         self,
         state: StateGrid,
         robots_rc: NDArray[np.int32],
         resolution_m: float,
         blacklist: BoolGrid | None = None,
         current: Sequence[NDArray[np.int32]] | None = None,
-    ) -> Decision:
-        """Run layers 1-3 on the centre's grid and give every robot a goal, a route and a path.
+    ) -> PosedDecision:
+        """Layer 1 and the distances: the :class:`PosedDecision` a global planner answers (or the end).
 
         ``blacklist`` marks frontier cells a robot stood on without resolving them; they are not
         candidates any more (explore_lite blacklists such goals too). ``current`` holds each robot's
@@ -169,24 +215,57 @@ class ExplorationPipeline:
             dist[i] = distances_at(field_i, clusters.centers_rc)
         kept = self._committed(clusters, fields, current, dist) if current is not None and self.commitment < 1 else {}
         if len(clusters) == 0:
-            return _ended(state, frontiers, clusters, n, "no_frontiers")
+            return PosedDecision(None, _ended(state, frontiers, clusters, n, "no_frontiers"))
         if not np.isfinite(dist).any():
-            return _ended(state, frontiers, clusters, n, "no_reachable_frontiers")
-        problem = AssignmentProblem(np.asarray(robots_rc, np.int32), clusters, dist, resolution_m, state)
-        assignment = self.planner.assign(problem)
+            return PosedDecision(None, _ended(state, frontiers, clusters, n, "no_reachable_frontiers"))
+        robots = np.asarray(robots_rc, np.int32)
+        problem = AssignmentProblem(
+            robots,
+            clusters,
+            dist,
+            resolution_m,
+            state,
+            current_cluster=_current_clusters(clusters, current, n),
+            robot_dist_cells=np.stack([distances_at(f, robots) for f in fields]),
+        )
+        return PosedDecision(problem, None, _Posed(frontiers, fields, passable, kept))
+
+    def finish(self, posed: PosedDecision, assignment: Assignment) -> Decision:
+        """Layer 3: routes and paths for the robots of ``assignment`` (an answer to ``posed.problem``)."""
+        if posed.problem is None or posed.work is None:
+            raise MrExploreError("finish() needs a posed decision with a problem; an ended one is already final")
+        p, w = posed.problem, posed.work
+        clusters, fields = p.clusters, w.fields
         routes = []
         for i, k in enumerate(assignment.cluster_of_robot):
             if k == UNASSIGNED:
                 targets = _NO_ROUTE
-            elif kept.get(i, (None,))[0] == k:
-                targets = kept[i][1]
+            elif w.kept.get(i, (None,))[0] == k:
+                targets = w.kept[i][1]
             elif self.local is not None and self.local.applies(int(clusters.sizes[k])):
-                route = self.local.route(passable, tuple(robots_rc[i]), fields[i], clusters.members_of(k), resolution_m)
+                route = self.local.route(
+                    w.passable, tuple(p.robots_rc[i]), fields[i], clusters.members_of(k), p.resolution_m
+                )
                 targets = route.targets_rc if route is not None else clusters.centers_rc[k : k + 1]
             else:
                 targets = clusters.centers_rc[k : k + 1]
             routes.append(targets)
-        return _decision(state, frontiers, clusters, assignment, routes, fields, passable)
+        return _decision(p.state, w.frontiers, clusters, assignment, routes, fields, w.passable)
+
+    def decide(
+        self,
+        state: StateGrid,
+        robots_rc: NDArray[np.int32],
+        resolution_m: float,
+        blacklist: BoolGrid | None = None,
+        current: Sequence[NDArray[np.int32]] | None = None,
+    ) -> Decision:
+        """Run layers 1-3 on the centre's grid and give every robot a goal, a route and a path
+        (:meth:`pose`, the global planner's answer, :meth:`finish`)."""
+        posed = self.pose(state, robots_rc, resolution_m, blacklist, current)
+        if posed.problem is None:
+            return posed.final  # type: ignore[return-value]
+        return self.finish(posed, self.planner.assign(posed.problem))
 
 
 @dataclass

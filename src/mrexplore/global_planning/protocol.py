@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
 
+from mrexplore.paths.distance_field import distance_matrix
 from mrexplore.preprocessing.clustering import Clusters
-from mrexplore.types import StateGrid
+from mrexplore.types import CellState, StateGrid
 
 __all__ = ["AssignmentProblem", "Assignment", "GlobalPlanner", "UNASSIGNED"]
 
@@ -35,6 +37,13 @@ class AssignmentProblem:
         Metres per cell.
     state:
         ``(H, W) uint8`` the centre's grid the distances were computed on.
+    current_cluster:
+        ``(n_robots,) int64`` the cluster holding each robot's current goal, -1 for none (None: not
+        known, as for a problem built by hand).
+    robot_dist_cells:
+        ``(n_robots, n_robots) float64`` geodesic distances between robots, cells (None: not known).
+    rng:
+        The mission's seeded generator, for stochastic planners (None: a planner must be deterministic).
     """
 
     robots_rc: NDArray[np.int32]
@@ -42,6 +51,25 @@ class AssignmentProblem:
     dist_cells: NDArray[np.float64]
     resolution_m: float
     state: StateGrid
+    current_cluster: NDArray[np.int64] | None = None
+    robot_dist_cells: NDArray[np.float64] | None = field(default=None, repr=False)
+    rng: np.random.Generator | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def n_robots(self) -> int:
+        return len(self.robots_rc)
+
+    @property
+    def n_clusters(self) -> int:
+        return len(self.clusters)
+
+    @cached_property
+    def cluster_dist_cells(self) -> NDArray[np.float64]:
+        """``(n_clusters, n_clusters) float64`` geodesic distances between cluster centres, cells; computed
+        on first use (one bounded search per centre), ``inf`` where unreachable."""
+        centres = self.clusters.centers_rc
+        d = distance_matrix(self.state == CellState.FREE, centres, centres)
+        return np.minimum(d, d.T)  # equal up to rounding; keep it symmetric
 
     @property
     def dist_m(self) -> NDArray[np.float64]:
