@@ -114,13 +114,13 @@ class Mission:
         self.rng = rng = np.random.default_rng(seed)
         if starts_rc is None:
             starts_rc = draw_starts(truth, sim_cfg.robots, sim_cfg.start_spread_m, rng)
-        starts_rc = np.asarray(starts_rc, dtype=np.int32)
-        if len(starts_rc) != sim_cfg.robots:
-            raise MrExploreError(f"starts must give one cell per robot ({sim_cfg.robots}), got {len(starts_rc)}")
-        self.starts_rc: NDArray[np.int32] = starts_rc
+        starts: NDArray[np.int32] = np.asarray(starts_rc, dtype=np.int32)
+        if len(starts) != sim_cfg.robots:
+            raise MrExploreError(f"starts must give one cell per robot ({sim_cfg.robots}), got {len(starts)}")
+        self.starts_rc = starts
         self._t0 = time.perf_counter()
-        strategy.prepare(truth, starts_rc, sim_cfg)
-        self.sim = sim = ExplorationSim(truth, starts_rc, sim_cfg, rng)
+        strategy.prepare(truth, starts, sim_cfg)
+        self.sim = sim = ExplorationSim(truth, starts, sim_cfg, rng)
         n = sim.n_robots
         self.goals = np.tile(NO_GOAL, (n, 1))
         self.blacklist = np.zeros(truth.shape, dtype=bool)
