@@ -10,10 +10,19 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
+import yaml
 
 from mrexplore.bench.report import write_report
 from mrexplore.bench.runner import EpisodeSpec, expand_maps, run_bench
-from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig, config_to_dict
+from mrexplore.config import (
+    GlobalPlanningConfig,
+    MapConfig,
+    MissionConfig,
+    SimConfig,
+    TrainConfig,
+    config_from_dict,
+    config_to_dict,
+)
 from mrexplore.maps.loaders import DEFAULT_MAP, load_map
 from mrexplore.maps.map_saver import save_ros_map
 from mrexplore.mission import run_mission
@@ -27,6 +36,8 @@ __all__ = ["main", "build_parser"]
 EXIT_BAD_INPUT = 2
 DEFAULT_STRATEGY = "hier"
 COMMITMENT_HELP = "goal hysteresis in [0, 1] (1: none; default: 0.5 for nearest/utility, 1 for hier)"
+POLICY_HELP = "weights of the learned strategy (hier), written by 'mrexplore train' (default: the shipped policy)"
+DEFAULT_TRAIN_MAPS = Path("..") / "shared" / "maps" / "train"
 MIN_REPLAN_HELP = (
     "steps a robot whose goal was seen drives on before the team replans "
     f"(default {MissionConfig.min_replan_steps}; 1: at once)"
@@ -67,6 +78,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--no-local", action="store_true", help="turn the local routing layer off: robots go to cluster centres"
     )
     ex.add_argument("--commitment", type=float, default=None, help=COMMITMENT_HELP)
+    ex.add_argument("--policy", default=None, help=POLICY_HELP)
     ex.add_argument("--seed", type=int, default=0, help="seed of starts and sensor noise (default 0)")
     ex.add_argument("--max-steps", type=int, default=MissionConfig.max_steps, help="step budget (default 20000)")
     ex.add_argument("--min-replan-steps", type=int, default=MissionConfig.min_replan_steps, help=MIN_REPLAN_HELP)
@@ -119,10 +131,32 @@ def build_parser() -> argparse.ArgumentParser:
         help="run the episodes as Ray tasks: 'local' starts Ray here, 'auto' or HOST:PORT joins a cluster",
     )
     be.add_argument("--commitment", type=float, default=None, help=COMMITMENT_HELP)
+    be.add_argument("--policy", default=None, help=POLICY_HELP)
     be.add_argument("--resolution", type=float, default=MapConfig.resolution_m, help="cell size, metres")
     be.add_argument("--max-steps", type=int, default=MissionConfig.max_steps, help="step budget per episode")
     be.add_argument("--min-replan-steps", type=int, default=MissionConfig.min_replan_steps, help=MIN_REPLAN_HELP)
     be.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="show a progress bar (default: only on a terminal)",
+    )
+    tr = sub.add_parser("train", help="train the learned global layer (imitation of a lookahead expert, then PPO)")
+    tr.add_argument("--out", required=True, help="folder for policy.pt, checkpoints, log.csv and stages.csv")
+    tr.add_argument("--config", default=None, help="YAML file of TrainConfig fields (see 'mrexplore train --help')")
+    budget = tr.add_mutually_exclusive_group()
+    budget.add_argument("--minutes", type=float, default=None, help="stop starting stages after this many minutes")
+    budget.add_argument("--episodes", type=int, default=None, help="stop after this many training episodes")
+    tr.add_argument("--workers", type=int, default=0, help="worker processes (default: one per core)")
+    tr.add_argument("--ray-address", default=None, help="run episodes as Ray tasks: 'local', 'auto' or HOST:PORT")
+    tr.add_argument("--resume", action="store_true", help="continue the run in --out after its last finished stage")
+    tr.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    tr.add_argument(
+        "--train-maps",
+        default=str(DEFAULT_TRAIN_MAPS),
+        help="folder of training maps (DungeonMaps PNGs; default ../shared/maps/train); procedural plans always",
+    )
+    tr.add_argument(
         "--progress",
         action=argparse.BooleanOptionalAction,
         default=None,
@@ -150,7 +184,7 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
     GlobalPlanningConfig(commitment=args.commitment)
     maps = expand_maps(args.maps)
     specs = [
-        EpisodeSpec(m, s, n, seed, args.resolution, args.max_steps, args.commitment, args.min_replan_steps)
+        EpisodeSpec(m, s, n, seed, args.resolution, args.max_steps, args.commitment, args.min_replan_steps, args.policy)
         for m in maps
         for s in strategies
         for n in robots
@@ -163,13 +197,66 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
     return f"{ran} episodes run, {len(specs) - ran} already done; wrote {out / 'results.csv'} and {out / 'report.md'}"
 
 
+def _train_config(path: str | None) -> TrainConfig:
+    if path is None:
+        return TrainConfig()
+    p = Path(path)
+    if not p.is_file():
+        raise MrExploreError(f"--config file {p} not found; pass a YAML file of TrainConfig fields")
+    try:
+        data = yaml.safe_load(p.read_text())
+    except yaml.YAMLError as exc:
+        raise MrExploreError(f"--config file {p} is not valid YAML ({type(exc).__name__}); fix it") from None
+    if data is None:
+        return TrainConfig()
+    if not isinstance(data, dict):
+        raise MrExploreError(f"--config file {p} must hold a mapping of TrainConfig fields, got {type(data).__name__}")
+    try:
+        return config_from_dict(TrainConfig, data)
+    except TypeError as exc:
+        raise MrExploreError(f"--config file {p}: {exc}") from None
+
+
+def _train(args: argparse.Namespace) -> str:
+    from mrexplore.global_planning.learned.trainer import train
+
+    cfg = _train_config(args.config)
+    if args.minutes is not None and not args.minutes > 0:
+        raise MrExploreError(f"--minutes must be > 0, got {args.minutes}")
+    if args.episodes is not None and args.episodes < 1:
+        raise MrExploreError(f"--episodes must be >= 1, got {args.episodes}")
+    if args.workers < 0:
+        raise MrExploreError(f"--workers must be >= 0, got {args.workers}")
+    train_dir = Path(args.train_maps)
+    result = train(
+        cfg,
+        Path(args.out),
+        train_dir if train_dir.is_dir() else None,
+        minutes=args.minutes,
+        episodes=args.episodes,
+        workers=args.workers,
+        ray_address=args.ray_address,
+        resume=args.resume,
+        seed=args.seed,
+        progress=args.progress,
+        say=lambda s: print(s, file=sys.stderr),
+    )
+    best = min(result.stages, key=lambda r: r["val_steps_mean"] if r["stage"] == result.best_stage else float("inf"))
+    return (
+        f"kept stage {result.best_stage} (validation {best['val_steps_mean']:.1f} steps); "
+        f"wrote {result.policy_path} and {result.policy_path.parent / 'stages.csv'}"
+    )
+
+
 def _explore(args: argparse.Namespace) -> dict[str, Any]:
     map_cfg = MapConfig(resolution_m=args.resolution, pixel_size_m=args.pixel_size)
     sim_cfg = SimConfig(robots=args.robots)
     mission_cfg = MissionConfig(
         max_steps=args.max_steps, min_replan_steps=args.min_replan_steps, transmission=args.transmission
     )
-    strategy = make_strategy(args.strategy, GlobalPlanningConfig(commitment=args.commitment), local=not args.no_local)
+    strategy = make_strategy(
+        args.strategy, GlobalPlanningConfig(commitment=args.commitment), local=not args.no_local, policy=args.policy
+    )
     if args.save_map and not Path(args.save_map).resolve().parent.is_dir():
         raise MrExploreError(f"--save-map folder {Path(args.save_map).parent} does not exist; create it first")
     truth = load_map(args.map, map_cfg)
@@ -207,6 +294,7 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
         "seed": args.seed,
         **result.measures.to_dict(),
         "starts_xy": [list(truth.frame.rc_to_xy((int(r), int(c)))) for r, c in result.starts_rc],
+        "policy": strategy.policy,
         "config": {
             "map": config_to_dict(map_cfg),
             "sim": config_to_dict(sim_cfg),
@@ -253,6 +341,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(json.dumps(rec) if args.json else _summary(rec))
         elif args.command == "bench":
             print(_bench(args, argv))
+        elif args.command == "train":
+            print(_train(args))
     except MrExploreError as exc:
         print(f"mrexplore: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -23,7 +23,10 @@ __all__ = [
     "LocalPlanningConfig",
     "CoScanConfig",
     "MissionConfig",
+    "LearnedConfig",
+    "TrainConfig",
     "config_to_dict",
+    "config_from_dict",
 ]
 
 
@@ -253,6 +256,146 @@ class MissionConfig:
         _require(self.replan_every_steps >= 1, "replan_every_steps", ">= 1", self.replan_every_steps)
         _require(self.min_replan_steps >= 1, "min_replan_steps", ">= 1", self.min_replan_steps)
         _require(self.transmission in ("delta", "full"), "transmission", "'delta' or 'full'", self.transmission)
+
+
+@dataclass(frozen=True)
+class LearnedConfig:
+    """Layer 2, learned: the multi-graph network's inputs and size (paper IV-B, eqs. 4-8)."""
+
+    hidden: int = 32
+    """Width of node features, queries, keys and values (paper: 32), >= 4."""
+    blocks: int = 2
+    """Operation blocks of [self-graph, cross-graph] attention (paper: l), >= 1."""
+    distance_scale_m: float = 10.0
+    """Distances and coordinates are divided by this before entering the network, metres, > 0."""
+    size_scale_m: float = 5.0
+    """Cluster sizes (members x resolution) are divided by this, metres, > 0."""
+    base_scale: float = 3.0
+    """The heuristic part of the affinity is -(utility cost) / base_scale (one nat per metre of detour at
+    explore_lite's weights), > 0."""
+    use_advantage: bool = True
+    """Edge feature: d_ik - min over j != i of d_jk (how much nearer robot i is than its team-mates)."""
+    use_current_goal: bool = True
+    """Edge feature: cluster k holds robot i's current goal (learned hysteresis)."""
+    use_isolation: bool = True
+    """Edge feature: distance from cluster k to its nearest other cluster centre (straight line: a
+    geodesic per centre costs more than the rest of a decision on large maps)."""
+
+    def __post_init__(self) -> None:
+        _require(self.hidden >= 4, "hidden", ">= 4", self.hidden)
+        _require(self.blocks >= 1, "blocks", ">= 1", self.blocks)
+        _require(self.distance_scale_m > 0, "distance_scale_m", "> 0 metres", self.distance_scale_m)
+        _require(self.size_scale_m > 0, "size_scale_m", "> 0 metres", self.size_scale_m)
+        _require(self.base_scale > 0, "base_scale", "> 0", self.base_scale)
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Training of the learned global layer: imitation of a lookahead expert (DAgger), then PPO on eq. 9."""
+
+    learned: LearnedConfig = field(default_factory=LearnedConfig)
+    resolution_m: float = 0.1
+    """Cell size of training maps, metres, > 0."""
+    robots_min: int = 2
+    """Fewest robots of a training episode, >= 1."""
+    robots_max: int = 5
+    """Most robots of a training episode, >= robots_min."""
+    max_steps: int = 1500
+    """Step budget of a training episode, >= 1."""
+    generated_share: float = 0.5
+    """Share of training episodes on procedural floor plans (the rest on training DungeonMaps), in [0, 1]."""
+    val_maps: int = 10
+    """Validation episodes per evaluation: half held-out training DungeonMaps, half held-out floor plans, >= 1."""
+    # -- imitation of the lookahead expert
+    dagger_rounds: int = 3
+    """Rounds of (collect on the student's own states, fit), >= 0; round 0's student is the heuristic."""
+    episodes_per_round: int = 16
+    """Training episodes collected per DAgger round, >= 1."""
+    label_every: int = 2
+    """Every this many decisions of an episode the expert labels (the others just move it on), >= 1."""
+    horizon_steps: int = 120
+    """Each expert candidate is run this many simulation steps forward, >= 1."""
+    noisy_candidates: int = 4
+    """Noisy utility assignments among the expert's candidates, >= 0."""
+    noise_m: float = 4.0
+    """Gumbel scale of the noise on the utility cost of noisy candidates, metres of detour, > 0."""
+    return_temperature: float = 5.0
+    """Target of the listwise loss: softmax(candidate return / this), > 0."""
+    imitation_epochs: int = 30
+    """Passes over the aggregated expert data per round, >= 1."""
+    lr: float = 1e-3
+    """Adam learning rate of imitation, > 0."""
+    # -- PPO on eq. 9
+    ppo_iterations: int = 2
+    """PPO iterations after imitation (0: none), >= 0."""
+    ppo_episodes: int = 8
+    """Episodes collected per PPO iteration, >= 1."""
+    ppo_epochs: int = 4
+    """Passes over a PPO batch, >= 1."""
+    ppo_lr: float = 3e-4
+    """Adam learning rate of PPO, > 0."""
+    gamma: float = 0.995
+    """Discount per simulation step (a decision spanning k steps discounts by gamma^k), in (0, 1]."""
+    gae_lambda: float = 0.95
+    """GAE lambda, in [0, 1]."""
+    clip: float = 0.2
+    """PPO ratio clip, > 0."""
+    value_coef: float = 0.5
+    """Weight of the value loss, >= 0."""
+    entropy_coef: float = 0.01
+    """Weight of the entropy bonus, >= 0."""
+    reward_scale: float = 0.01
+    """Rewards of eq. 9 are multiplied by this for the critic's sake, > 0."""
+    imitation_coef: float = 1.0
+    """Weight of the listwise expert loss kept during PPO on the aggregated data (keeps the policy near
+    the expert while RL fine-tunes), >= 0."""
+
+    def __post_init__(self) -> None:
+        _require(self.resolution_m > 0, "resolution_m", "> 0 metres", self.resolution_m)
+        _require(self.robots_min >= 1, "robots_min", ">= 1", self.robots_min)
+        _require(
+            self.robots_max >= self.robots_min, "robots_max", f">= robots_min ({self.robots_min})", self.robots_max
+        )
+        _require(self.max_steps >= 1, "max_steps", ">= 1", self.max_steps)
+        _require(0 <= self.generated_share <= 1, "generated_share", "in [0, 1]", self.generated_share)
+        _require(self.val_maps >= 1, "val_maps", ">= 1", self.val_maps)
+        for name in ("dagger_rounds", "noisy_candidates", "ppo_iterations"):
+            _require(getattr(self, name) >= 0, name, ">= 0", getattr(self, name))
+        for name in (
+            "episodes_per_round",
+            "label_every",
+            "horizon_steps",
+            "imitation_epochs",
+            "ppo_episodes",
+            "ppo_epochs",
+        ):
+            _require(getattr(self, name) >= 1, name, ">= 1", getattr(self, name))
+        for name in ("noise_m", "return_temperature", "lr", "ppo_lr", "clip", "reward_scale"):
+            _require(getattr(self, name) > 0, name, "> 0", getattr(self, name))
+        _require(0 < self.gamma <= 1, "gamma", "in (0, 1]", self.gamma)
+        _require(0 <= self.gae_lambda <= 1, "gae_lambda", "in [0, 1]", self.gae_lambda)
+        for name in ("value_coef", "entropy_coef", "imitation_coef"):
+            _require(getattr(self, name) >= 0, name, ">= 0", getattr(self, name))
+
+
+def config_from_dict(cls: type[Any], data: dict[str, Any]) -> Any:
+    """Rebuild a config dataclass from :func:`config_to_dict` output (nested configs too); unknown keys
+    are refused by name."""
+    import dataclasses
+
+    names = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = sorted(set(data) - set(names))
+    if unknown:
+        raise MrExploreError(f"unknown {cls.__name__} keys {', '.join(unknown)}; known: {', '.join(names)}")
+    kwargs: dict[str, Any] = {}
+    for k, v in data.items():
+        factory = names[k].default_factory
+        sub = type(factory()) if callable(factory) else None
+        if sub is not None and dataclasses.is_dataclass(sub) and isinstance(v, dict):
+            kwargs[k] = config_from_dict(sub, v)
+        else:
+            kwargs[k] = v
+    return cls(**kwargs)
 
 
 def config_to_dict(cfg: Any) -> dict[str, Any]:

@@ -155,9 +155,9 @@ class Mission:
         return self.sim.steps
 
     def snapshot(self) -> MissionSnapshot:
-        """Copy of everything a step or a decision changes (the strategy, observer and truth are shared)."""
-        if self._posed is not None:
-            raise MrExploreError("snapshot() between pose() and commit(); commit the posed decision first")
+        """Copy of everything a step or a decision changes (the strategy, observer and truth are shared).
+        Taken between :meth:`pose` and :meth:`commit`, it holds the posed decision too: a lookahead expert
+        restores it once per candidate assignment and commits that."""
         keep = {k: v for k, v in self.__dict__.items() if k not in _NOT_COPIED}
         return MissionSnapshot(copy.deepcopy(keep))
 
@@ -267,7 +267,7 @@ class Mission:
         t = time.perf_counter()
         self.state = self.link.exchange(self.sim.beliefs, self.sim.positions_rc)
         posed = self.strategy.pose(
-            self.state, self.sim.positions_rc.copy(), self.truth.resolution_m, self.blacklist, self._current()
+            self.state, self.sim.positions_rc.copy(), self.truth.resolution_m, self.blacklist, self._current(), self.rng
         )
         ms = (time.perf_counter() - t) * 1e3 - self.link.robot_ms
         if posed.problem is None:

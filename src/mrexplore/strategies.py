@@ -30,6 +30,7 @@ __all__ = [
     "make_strategy",
     "strategy_names",
     "NO_GOAL",
+    "LEARNED",
 ]
 
 NO_GOAL = np.array([-1, -1], dtype=np.int32)
@@ -158,6 +159,8 @@ class ExplorationPipeline:
     goals_are_frontiers: bool = True
     """Goals are frontier cells: a goal that stops bordering unknown space is resolved (False for the
     oracle, whose goals are viewpoints)."""
+    policy: dict[str, str] | None = None
+    """Where a learned planner's weights came from: ``{"path", "sha256", "code_version"}``; None: no network."""
 
     def prepare(self, truth: GroundTruthMap, starts_rc: NDArray[np.integer], sim: SimConfig) -> None:
         """Called once before a mission; only a yardstick that knows the map uses it."""
@@ -192,6 +195,7 @@ class ExplorationPipeline:
         resolution_m: float,
         blacklist: BoolGrid | None = None,
         current: Sequence[NDArray[np.int32]] | None = None,
+        rng: np.random.Generator | None = None,
     ) -> PosedDecision:
         """Layer 1 and the distances: the :class:`PosedDecision` a global planner answers (or the end).
 
@@ -227,6 +231,7 @@ class ExplorationPipeline:
             state,
             current_cluster=_current_clusters(clusters, current, n),
             robot_dist_cells=np.stack([distances_at(f, robots) for f in fields]),
+            rng=rng,
         )
         return PosedDecision(problem, None, _Posed(frontiers, fields, passable, kept))
 
@@ -379,37 +384,70 @@ def _commitment(gp: GlobalPlanningConfig, default: float) -> float:
     return default if gp.commitment is None else gp.commitment
 
 
-def _nearest(gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig) -> ExplorationPipeline:
+def _nearest(
+    gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig, policy: str | None
+) -> ExplorationPipeline:
     return ExplorationPipeline("nearest", NearestPlanner(), pp, commitment=_commitment(gp, CENTRE_COMMITMENT))
 
 
-def _utility(gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig) -> ExplorationPipeline:
+def _utility(
+    gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig, policy: str | None
+) -> ExplorationPipeline:
     return ExplorationPipeline("utility", UtilityPlanner(gp), pp, commitment=_commitment(gp, CENTRE_COMMITMENT))
 
 
-def _hier(gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig) -> ExplorationPipeline:
-    # The paper's three layers; the global affinity is the utility cost until the learned one lands. No
-    # hysteresis by default: a route already commits the robot to a sequence of targets (measured on 6
-    # maps x 2 seeds: 442 mean steps without, 480 with commitment 0.5).
-    return ExplorationPipeline("hier", UtilityPlanner(gp), pp, LocalRouter(lp, pp), _commitment(gp, 1.0))
+def _hier_heuristic(
+    gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig, policy: str | None
+) -> ExplorationPipeline:
+    # The paper's three layers with explore_lite's cost as the global affinity. No hysteresis by default: a
+    # route already commits the robot to a sequence of targets (measured on 6 maps x 2 seeds: 442 mean
+    # steps without, 480 with commitment 0.5).
+    return ExplorationPipeline("hier-heuristic", UtilityPlanner(gp), pp, LocalRouter(lp, pp), _commitment(gp, 1.0))
 
 
-def _coscan(gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig) -> ExplorationPipeline:
+def _hier(
+    gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig, policy: str | None
+) -> ExplorationPipeline:
+    # The paper's three layers with the learned global layer (mGNN affinities, Hungarian decoding); torch is
+    # imported here only, so that every other strategy runs without it.
+    from pathlib import Path
+
+    from mrexplore.global_planning.learned.checkpoint import load_policy
+    from mrexplore.global_planning.learned.policy import LearnedPlanner
+
+    loaded = load_policy(Path(policy) if policy else None)
+    info = {"path": str(loaded.path), "sha256": loaded.sha256, "code_version": str(loaded.meta["code_version"])}
+    planner = LearnedPlanner(loaded.net, gp)
+    return ExplorationPipeline("hier", planner, pp, LocalRouter(lp, pp), _commitment(gp, 1.0), policy=info)
+
+
+def _coscan(
+    gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig, policy: str | None
+) -> ExplorationPipeline:
     return CoScanPipeline("coscan", UtilityPlanner(gp), pp)
 
 
-def _oracle(gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig) -> ExplorationPipeline:
+def _oracle(
+    gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig, policy: str | None
+) -> ExplorationPipeline:
     return OraclePipeline("oracle", NearestPlanner(), pp, goals_are_frontiers=False)
 
 
-STRATEGIES: dict[str, Callable[[GlobalPlanningConfig, PreprocessConfig, LocalPlanningConfig], ExplorationPipeline]] = {
+STRATEGIES: dict[
+    str, Callable[[GlobalPlanningConfig, PreprocessConfig, LocalPlanningConfig, str | None], ExplorationPipeline]
+] = {
     "hier": _hier,
+    "hier-heuristic": _hier_heuristic,
     "nearest": _nearest,
     "utility": _utility,
     "coscan": _coscan,
     "oracle": _oracle,
 }
-"""Strategy name -> factory of its pipeline."""
+"""Strategy name -> factory of its pipeline (the last argument: a policy file for learned planners, None
+for the shipped one)."""
+
+LEARNED = ("hier",)
+"""Strategies with a network, which ``policy`` selects."""
 
 
 def strategy_names() -> list[str]:
@@ -422,18 +460,23 @@ def make_strategy(
     preprocess_cfg: PreprocessConfig | None = None,
     local_cfg: LocalPlanningConfig | None = None,
     local: bool = True,
+    policy: str | None = None,
 ) -> ExplorationPipeline:
     """The pipeline called ``name``; unknown names raise a one-line error listing the choices.
 
     ``local=False`` (or a ``-nolocal`` suffix on the name) removes the local layer: robots go to cluster
-    centres, for ablations; the pipeline's name then carries the suffix.
+    centres, for ablations; the pipeline's name then carries the suffix. ``policy`` is the weights file
+    of a learned strategy (None: the policy shipped in the package).
     """
     if name.endswith(NO_LOCAL_SUFFIX) and name.removesuffix(NO_LOCAL_SUFFIX) in STRATEGIES:
         name, local = name.removesuffix(NO_LOCAL_SUFFIX), False
     if name not in STRATEGIES:
         raise MrExploreError(f"unknown strategy {name!r}; choose one of {', '.join(STRATEGIES)}")
     pipeline = STRATEGIES[name](
-        global_cfg or GlobalPlanningConfig(), preprocess_cfg or PreprocessConfig(), local_cfg or LocalPlanningConfig()
+        global_cfg or GlobalPlanningConfig(),
+        preprocess_cfg or PreprocessConfig(),
+        local_cfg or LocalPlanningConfig(),
+        policy,
     )
     if not local and pipeline.local is not None:
         pipeline.local = None

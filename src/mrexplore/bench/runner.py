@@ -70,6 +70,8 @@ class EpisodeSpec:
     max_steps: int = 20000
     commitment: float | None = None
     min_replan_steps: int = MissionConfig.min_replan_steps
+    policy: str | None = None
+    """Weights of a learned strategy (None: the shipped policy)."""
 
     @property
     def key(self) -> tuple[str, str, int, int]:
@@ -121,7 +123,7 @@ def run_episode(spec: EpisodeSpec) -> dict[str, Any]:
     truth = _load_shared(spec.map_path, spec.resolution_m)
     result = run_mission(
         truth,
-        make_strategy(spec.strategy, GlobalPlanningConfig(commitment=spec.commitment)),
+        make_strategy(spec.strategy, GlobalPlanningConfig(commitment=spec.commitment), policy=spec.policy),
         SimConfig(robots=spec.robots),
         MissionConfig(max_steps=spec.max_steps, min_replan_steps=spec.min_replan_steps),
         seed=spec.seed,
@@ -190,8 +192,8 @@ def run_bench(
 
     Returns the number of episodes run now. Each finished episode is appended (and flushed) at once.
     """
-    for s in specs:
-        make_strategy(s.strategy)  # unknown names fail before any work starts
+    for name, policy in {(s.strategy, s.policy) for s in specs}:
+        make_strategy(name, policy=policy)  # unknown names and unreadable policies fail before any work starts
     results_csv.parent.mkdir(parents=True, exist_ok=True)
     _check_columns(results_csv)
     done = _done_keys(read_rows(results_csv))

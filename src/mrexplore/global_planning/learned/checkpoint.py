@@ -1,0 +1,98 @@
+"""Saving and loading policies: weights, the resolved configs and the code version, with clear errors."""
+
+from __future__ import annotations
+
+import hashlib
+import subprocess
+from importlib import metadata, resources
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from mrexplore.config import LearnedConfig, config_from_dict, config_to_dict
+from mrexplore.global_planning.learned.network import MultiGraphNet
+from mrexplore.types import MrExploreError
+
+__all__ = ["save_policy", "load_policy", "default_policy_path", "file_sha256", "code_version", "LoadedPolicy"]
+
+VALUE_INPUTS = 4
+"""Privileged scalars of the critic: remaining explorable area (m^2 / 100), coverage, steps / 1000, robots / 10."""
+
+
+def default_policy_path() -> Path:
+    """The pretrained policy shipped inside the package."""
+    return Path(str(resources.files("mrexplore.global_planning.learned") / "pretrained" / "policy.pt"))
+
+
+def file_sha256(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def code_version() -> str:
+    """The package version, with the git commit where the source is a checkout."""
+    try:
+        version = metadata.version("mrexplore")
+    except metadata.PackageNotFoundError:
+        version = "unknown"
+    try:
+        sha = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"],
+            cwd=Path(__file__).parent,
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=False,
+        ).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        sha = ""
+    return f"{version}+{sha}" if sha else version
+
+
+class LoadedPolicy:
+    """A network with where it came from (path, sha256, what the file records)."""
+
+    def __init__(self, net: MultiGraphNet, path: Path, sha256: str, meta: dict[str, Any]) -> None:
+        self.net, self.path, self.sha256, self.meta = net, path, sha256, meta
+
+
+def save_policy(path: Path, net: MultiGraphNet, meta: dict[str, Any] | None = None) -> None:
+    """Write the weights (float32), the network's config, the code version and ``meta`` (plain data)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    blob = {
+        "format": "mrexplore-policy-1",
+        "learned_config": config_to_dict(net.cfg),
+        "value_inputs": net.value_inputs,
+        "state_dict": {k: v.detach().float().contiguous() for k, v in net.state_dict().items()},
+        "code_version": code_version(),
+        "meta": meta or {},
+    }
+    tmp = path.with_name(path.name + ".tmp")
+    torch.save(blob, tmp)
+    tmp.replace(path)  # atomic: a kill never leaves half a policy
+
+
+def load_policy(path: Path | None = None) -> LoadedPolicy:
+    """Load a policy written by :func:`save_policy` (default: the shipped one); one-line errors."""
+    path = Path(path) if path is not None else default_policy_path()
+    if not path.is_file():
+        raise MrExploreError(f"policy file {path} not found; pass a file written by 'mrexplore train' with --policy")
+    try:
+        blob = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as exc:  # noqa: BLE001 - torch raises many kinds for a file that is not a checkpoint
+        raise MrExploreError(
+            f"policy file {path} is not a mrexplore policy ({type(exc).__name__}); retrain it"
+        ) from None
+    if not isinstance(blob, dict) or blob.get("format") != "mrexplore-policy-1":
+        raise MrExploreError(f"policy file {path} is not a mrexplore policy (no format tag); retrain it")
+    cfg = config_from_dict(LearnedConfig, blob["learned_config"])
+    net = MultiGraphNet(cfg, int(blob["value_inputs"]))
+    try:
+        net.load_state_dict(blob["state_dict"])
+    except RuntimeError as exc:
+        first = str(exc).splitlines()[0]
+        raise MrExploreError(f"policy file {path} does not fit this network ({first}); retrain it") from None
+    net.eval()
+    meta = {k: blob[k] for k in ("code_version", "meta", "learned_config")}
+    return LoadedPolicy(net, path, file_sha256(path), meta)

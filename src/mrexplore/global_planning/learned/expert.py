@@ -1,0 +1,94 @@
+"""The lookahead expert (training only, may use the simulator's truth): candidate assignments run forward
+from the same decision and scored by the return of paper eq. 9 over a horizon."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mrexplore.config import GlobalPlanningConfig
+from mrexplore.global_planning.classical import NearestPlanner, UtilityPlanner, utility_cost
+from mrexplore.global_planning.hungarian import match_min_cost
+from mrexplore.global_planning.learned.features import GraphInputs
+from mrexplore.global_planning.protocol import Assignment, AssignmentProblem, GlobalPlanner
+from mrexplore.mission import Mission
+
+__all__ = ["ExpertLabel", "candidate_assignments", "lookahead_returns", "horizon_return", "privileged_scalars"]
+
+
+@dataclass(frozen=True)
+class ExpertLabel:
+    """One decision the expert ranked: the network's inputs, the candidates and their returns."""
+
+    inputs: GraphInputs
+    candidates: NDArray[np.int64]
+    """``(M, R) int64`` cluster per robot of each candidate (-1: none)."""
+    returns: NDArray[np.float64]
+    """``(M,) float64`` eq. 9 return of each candidate over the horizon."""
+
+
+def candidate_assignments(
+    problem: AssignmentProblem,
+    student: Assignment,
+    heuristic: GlobalPlanningConfig,
+    noisy: int,
+    noise_m: float,
+    rng: np.random.Generator,
+) -> list[NDArray[np.int64]]:
+    """Distinct assignments worth comparing: the student's, utility's, nearest's and ``noisy`` utility
+    matchings whose cost carries Gumbel noise of scale ``noise_m`` metres of detour."""
+    out = [student.cluster_of_robot, UtilityPlanner(heuristic).assign(problem).cluster_of_robot]
+    out.append(NearestPlanner().assign(problem).cluster_of_robot)
+    cost = utility_cost(problem, heuristic)
+    for _ in range(noisy):
+        noise = rng.gumbel(0.0, noise_m * heuristic.distance_weight, size=cost.shape)
+        out.append(match_min_cost(cost + noise))
+    unique: dict[tuple[int, ...], NDArray[np.int64]] = {}
+    for a in out:
+        unique.setdefault(tuple(int(v) for v in a), np.asarray(a, dtype=np.int64))
+    return list(unique.values())
+
+
+def horizon_return(mission: Mission, start_steps: int, start_known: int) -> float:
+    """Eq. 9 summed from (``start_steps``, ``start_known`` cells) to now: R_time per step plus lambda times
+    the newly known explorable area in m^2."""
+    r = mission.sim_cfg.reward
+    steps = mission.steps - start_steps
+    new_m2 = (mission.sim.known_cells - start_known) * mission.truth.resolution_m**2
+    return float(r.time_reward * steps + r.area_weight * new_m2)
+
+
+def lookahead_returns(
+    mission: Mission, candidates: list[NDArray[np.int64]], horizon_steps: int, continuation: GlobalPlanner
+) -> NDArray[np.float64]:
+    """Return of each candidate: commit it at the posed decision, then let ``continuation`` decide until
+    ``horizon_steps`` steps passed or the mission ended. The mission is left as it was (posed)."""
+    snap = mission.snapshot()
+    own = mission.strategy.planner
+    start_steps, start_known = mission.steps, mission.sim.known_cells
+    budget = min(mission.mission_cfg.max_steps, start_steps + horizon_steps)
+    returns = np.zeros(len(candidates))
+    mission.strategy.planner = continuation
+    try:
+        for j, cand in enumerate(candidates):
+            mission.restore(snap)
+            # The horizon as a step budget, so every candidate is measured over the same steps (restored after).
+            mission.mission_cfg = replace(mission.mission_cfg, max_steps=budget)
+            mission.commit(Assignment(cand))
+            while mission.advance():
+                mission.decide()
+            returns[j] = horizon_return(mission, start_steps, start_known)
+    finally:
+        mission.strategy.planner = own
+        mission.restore(snap)
+    return returns
+
+
+def privileged_scalars(mission: Mission) -> NDArray[np.float32]:
+    """The critic's extra inputs (never the actor's): remaining explorable area (100 m^2), coverage,
+    steps (1000s), team size (tens)."""
+    sim = mission.sim
+    remaining_m2 = (sim.n_explorable - sim.known_cells) * mission.truth.resolution_m**2
+    return np.array([remaining_m2 / 100.0, sim.coverage, sim.steps / 1000.0, sim.n_robots / 10.0], np.float32)

@@ -1,0 +1,188 @@
+"""The learned global planner: mGNN affinities decoded by the Hungarian algorithm (evaluation) or sampled by
+robots choosing one after another without replacement (training), with an exact log-probability."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+from numpy.typing import NDArray
+from torch import Tensor
+
+from mrexplore.config import GlobalPlanningConfig
+from mrexplore.global_planning.classical import utility_cost
+from mrexplore.global_planning.hungarian import match_min_cost
+from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs
+from mrexplore.global_planning.learned.network import MultiGraphNet, collate
+from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
+
+__all__ = [
+    "LearnedPlanner",
+    "PolicyStep",
+    "hungarian_decode",
+    "sample_sequential",
+    "sequential_log_prob",
+    "assignment_score",
+]
+
+
+def hungarian_decode(affinity: NDArray[np.floating]) -> NDArray[np.int64]:
+    """The assignment maximising the summed affinity (paper eq. 2); ``-inf`` pairs are never used.
+
+    Where robots outnumber clusters, every cluster is used once before any is shared (the "virtual
+    clusters" of the paper's remark, of -inf affinity below any real one); where clusters outnumber
+    robots, the rest stay unassigned (its virtual robots). See :func:`match_min_cost`.
+
+    Examples
+    --------
+    >>> hungarian_decode(np.array([[5.0, 4.0], [4.0, 0.0]])).tolist()  # 4 + 4 beats 5 + 0
+    [1, 0]
+    """
+    return match_min_cost(-np.asarray(affinity, dtype=np.float64))
+
+
+def _available(allowed: NDArray[np.bool_], taken: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """Clusters a robot may pick: allowed ones no robot took yet; when all are taken, any allowed one."""
+    free = allowed & ~taken
+    return free if free.any() else allowed
+
+
+def sample_sequential(
+    affinity: NDArray[np.floating], rng: np.random.Generator
+) -> tuple[NDArray[np.int64], NDArray[np.int64], float]:
+    """Robots choose in a random order, each a cluster with probability softmax(affinity) over the clusters
+    it may still take (:func:`_available`).
+
+    Returns ``order (R,)``, ``choices (R,)`` (cluster per robot, :data:`UNASSIGNED` where none is allowed)
+    and the log-probability of the choices given the order (which does not depend on the network).
+    """
+    aff = np.asarray(affinity, dtype=np.float64)
+    R, C = aff.shape
+    order = rng.permutation(R).astype(np.int64)
+    choices = np.full(R, UNASSIGNED, dtype=np.int64)
+    taken = np.zeros(C, dtype=bool)
+    logp = 0.0
+    for i in order:
+        allowed = np.isfinite(aff[i])
+        if not allowed.any():
+            continue
+        avail = _available(allowed, taken)
+        z = np.where(avail, aff[i], -np.inf)
+        z = z - z[avail].max()
+        p = np.exp(z)
+        p /= p.sum()
+        k = int(rng.choice(C, p=p))
+        choices[i] = k
+        taken[k] = True
+        logp += float(np.log(p[k]))
+    return order, choices, logp
+
+
+def sequential_log_prob(affinity: Tensor, order: Tensor, choices: Tensor) -> tuple[Tensor, Tensor]:
+    """Log-probability and entropy ``(B,)`` of ``choices`` under the sequential policy, batched.
+
+    ``affinity (B, R, C)`` with ``-inf`` for forbidden pairs; ``order (B, R)`` robot indices (-1 for
+    padding); ``choices (B, R)`` cluster per robot (-1 for none). The entropy is that of each robot's
+    choice given those before it, summed (the joint entropy given the order, in expectation).
+    """
+    B, R, C = affinity.shape
+    taken = torch.zeros(B, C, dtype=torch.bool)
+    logp = affinity.new_zeros(B)
+    entropy = affinity.new_zeros(B)
+    rows = torch.arange(B)
+    for t in range(R):
+        i = order[:, t]
+        valid = i >= 0
+        logits = affinity[rows, i.clamp(min=0)]
+        allowed = torch.isfinite(logits) & valid[:, None]
+        free = allowed & ~taken
+        avail = torch.where(free.any(-1, keepdim=True), free, allowed)
+        has = avail.any(-1)
+        lp = torch.log_softmax(torch.where(avail, logits, torch.full_like(logits, -1e9)), dim=-1)
+        c = choices[rows, i.clamp(min=0)]
+        pick = has & (c >= 0)
+        logp = logp + torch.where(pick, lp[rows, c.clamp(min=0)], torch.zeros_like(logp))
+        p = torch.exp(lp) * avail
+        entropy = entropy - torch.where(has, (p * torch.where(avail, lp, torch.zeros_like(lp))).sum(-1), 0.0)
+        taken = taken | (torch.nn.functional.one_hot(c.clamp(min=0), C).bool() & pick[:, None])
+    return logp, entropy
+
+
+def assignment_score(affinity: Tensor, candidates: Tensor) -> Tensor:
+    """Summed affinity (paper eq. 2) of candidate assignments: ``affinity (B, R, C)``, ``candidates
+    (B, M, R)`` cluster per robot (-1: none, or padding) -> ``(B, M)``. Forbidden pairs count 0."""
+    B, M, R = candidates.shape
+    safe = torch.where(torch.isfinite(affinity), affinity, torch.zeros_like(affinity))
+    idx = candidates.clamp(min=0)
+    picked = torch.gather(safe[:, None].expand(-1, M, -1, -1), 3, idx[..., None]).squeeze(-1)  # (B, M, R)
+    return (picked * (candidates >= 0)).sum(-1)
+
+
+@dataclass
+class PolicyStep:
+    """What the sampling planner did at one decision (for PPO)."""
+
+    inputs: GraphInputs
+    order: NDArray[np.int64]
+    choices: NDArray[np.int64]
+    logp: float
+    value: float
+    extra: NDArray[np.float32]
+    """The critic's privileged scalars at this decision."""
+
+
+@dataclass
+class LearnedPlanner:
+    """The paper's learned global layer behind the :class:`GlobalPlanner` protocol.
+
+    Deterministic by default (Hungarian on E_rc). With ``sample=True`` it draws from the sequential
+    policy with ``rng`` (or the problem's generator) and appends a :class:`PolicyStep` to ``record``.
+    """
+
+    net: MultiGraphNet
+    heuristic: GlobalPlanningConfig = field(default_factory=GlobalPlanningConfig)
+    name: str = "learned"
+    sample: bool = False
+    rng: np.random.Generator | None = None
+    record: list[PolicyStep] | None = None
+    value_extra: NDArray[np.float32] | None = None
+    """Privileged scalars for the critic at the next decision (set by the trainer; the actor never reads them)."""
+
+    def affinity(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64], float]:
+        """E_rc ``(R, C) float64`` (``-inf`` where unreachable), with the inputs and the critic's value.
+
+        E_rc = -(cost - base_scale * residual) / base_scale, the cost being explore_lite's in float64.
+        """
+        g, cost, value = self._cost(problem)
+        return g, -cost / self.net.cfg.base_scale, value
+
+    def _cost(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64], float]:
+        """The affinity in cost form, ``cost - base_scale * residual`` (``inf`` where unreachable)."""
+        g = graph_inputs(problem, self.net.cfg, self.heuristic)
+        with torch.no_grad():
+            batch = collate([g])
+            vr, vc = self.net.encode(batch)
+            residual = self.net.residual(vr, vc, batch)[0, : g.n_robots, : g.n_clusters].double().numpy()
+            value = 0.0
+            if self.record is not None:
+                extra = torch.zeros(1, self.net.value_inputs)
+                if self.value_extra is not None:
+                    extra = torch.from_numpy(self.value_extra[None])
+                value = float(self.net.value_of(vr, vc, batch, extra)[0])
+        cost = utility_cost(problem, self.heuristic) - self.net.cfg.base_scale * residual  # inf stays inf
+        return g, cost, value
+
+    def assign(self, problem: AssignmentProblem) -> Assignment:
+        g, cost, value = self._cost(problem)
+        if not self.sample:
+            # Hungarian on E_rc (eq. 2) in cost form, argmin sum (cost - scale * residual): with a zero
+            # residual exactly the utility planner's matching (no float rounding of its ties).
+            return Assignment(match_min_cost(cost))
+        aff = -cost / self.net.cfg.base_scale
+        rng = self.rng or problem.rng or np.random.default_rng()
+        order, choices, logp = sample_sequential(aff, rng)
+        if self.record is not None:
+            extra = self.value_extra if self.value_extra is not None else np.zeros(self.net.value_inputs, np.float32)
+            self.record.append(PolicyStep(g, order, choices, logp, value, extra))
+        return Assignment(choices)

@@ -1,0 +1,674 @@
+"""Training of the learned global layer: the heuristic start, DAgger rounds on the lookahead expert, PPO.
+
+The loop reads top to bottom (stages: baseline, dagger*, ppo*). Each stage collects episodes in worker
+processes (or Ray tasks), updates the network, validates it on held-out maps with deterministic
+decoding, logs, and checkpoints; ``resume`` continues after the last finished stage. The policy kept is
+the one with the fewest validation steps, never the last by default.
+"""
+
+from __future__ import annotations
+
+import csv
+import functools
+import io
+import math
+import multiprocessing
+import os
+import shutil
+import sys
+import time
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from tqdm import tqdm
+
+from mrexplore.config import MapConfig, MissionConfig, SimConfig, TrainConfig, config_to_dict
+from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS, code_version, save_policy
+from mrexplore.global_planning.learned.expert import (
+    ExpertLabel,
+    candidate_assignments,
+    lookahead_returns,
+    privileged_scalars,
+)
+from mrexplore.global_planning.learned.features import GraphInputs
+from mrexplore.global_planning.learned.network import MultiGraphNet, collate
+from mrexplore.global_planning.learned.policy import (
+    LearnedPlanner,
+    PolicyStep,
+    assignment_score,
+    sequential_log_prob,
+)
+from mrexplore.global_planning.learned.ppo import gae, listwise_loss, ppo_loss
+from mrexplore.maps.ground_truth import GroundTruthMap
+from mrexplore.maps.loaders import load_map
+from mrexplore.mission import Mission
+from mrexplore.strategies import ExplorationPipeline, make_strategy
+from mrexplore.threads import THREADS_ENV
+from mrexplore.types import MrExploreError
+
+__all__ = ["train", "TrainResult", "split_maps", "LOG_COLUMNS"]
+
+LOG_COLUMNS = [
+    "time_s", "stage", "episodes", "decisions", "labels", "loss", "expert_agreement", "kl", "clip_fraction",
+    "entropy", "return_mean", "steps_mean", "coverage_mean", "val_steps_mean", "val_coverage_mean",
+    "decisions_per_s",
+]  # fmt: skip
+_VAL_SEED0 = 1_000_000
+"""Procedural validation plans use seeds from here; training plans draw seeds below it."""
+_BATCH = 64
+
+
+# -- maps -------------------------------------------------------------------------------------------------
+def split_maps(train_dir: Path | None, val_maps: int) -> tuple[list[str], list[str]]:
+    """Training and validation map specs: training DungeonMaps (the last ones by name held out) and
+    procedural floor plans (``generated:SEED``; validation seeds from 1,000,000). Half the validation maps
+    are DungeonMaps where the folder exists."""
+    dungeons: list[str] = []
+    if train_dir is not None and train_dir.is_dir():
+        dungeons = sorted(str(p) for p in train_dir.rglob("*.png"))
+    n_dungeon_val = min(len(dungeons) // 10, val_maps // 2) if dungeons else 0
+    val = dungeons[len(dungeons) - n_dungeon_val :] if n_dungeon_val else []
+    val += [f"generated:{_VAL_SEED0 + i}" for i in range(val_maps - len(val))]
+    return dungeons[: len(dungeons) - n_dungeon_val], val
+
+
+@functools.lru_cache(maxsize=4)
+def _map(spec: str, resolution_m: float) -> GroundTruthMap:
+    truth = load_map(spec, MapConfig(resolution_m=resolution_m))
+    truth.occupied.flags.writeable = False
+    return truth
+
+
+# -- what workers run -------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class _Job:
+    kind: str
+    """"expert" (DAgger collection), "ppo" (sampled rollout) or "eval" (deterministic, None weights: heuristic)."""
+    map_spec: str
+    robots: int
+    seed: int
+    weights: bytes | None
+    cfg: TrainConfig
+
+
+def _weights(net: MultiGraphNet) -> bytes:
+    buf = io.BytesIO()
+    torch.save(net.state_dict(), buf)
+    return buf.getvalue()
+
+
+def _net_from(job: _Job) -> MultiGraphNet:
+    net = MultiGraphNet(job.cfg.learned, VALUE_INPUTS)
+    if job.weights is not None:
+        net.load_state_dict(torch.load(io.BytesIO(job.weights), weights_only=True))
+    net.eval()
+    return net
+
+
+def _pipeline(planner: LearnedPlanner | None) -> ExplorationPipeline:
+    """``hier`` with the given planner (its local layer in the loop); the heuristic one for None."""
+    pipeline = make_strategy("hier-heuristic")
+    if planner is not None:
+        pipeline.planner = planner
+        pipeline.name = "hier"
+    return pipeline
+
+
+def _mission(job: _Job, pipeline: ExplorationPipeline) -> Mission:
+    truth = _map(job.map_spec, job.cfg.resolution_m)
+    cfg = MissionConfig(max_steps=job.cfg.max_steps)
+    return Mission(truth, pipeline, SimConfig(robots=job.robots), cfg, seed=job.seed, progress=False)
+
+
+def _episode_stats(m: Mission, decisions: int) -> dict[str, float]:
+    return {
+        "steps": m.steps,
+        "coverage": m.sim.coverage,
+        "decisions": decisions,
+        "done": float(m.done_reason != "max_steps"),
+    }
+
+
+def _run_job(job: _Job) -> dict[str, Any]:
+    """One episode in a worker; returns plain data (labels, a trajectory, or an evaluation)."""
+    net = _net_from(job)
+    if job.kind == "eval":
+        m = _mission(job, _pipeline(LearnedPlanner(net) if job.weights is not None else None))
+        decisions = 0
+        while m.advance():
+            m.decide()
+            decisions += 1
+        return _episode_stats(m, decisions)
+    if job.kind == "expert":
+        return _run_expert(job, net)
+    return _run_ppo(job, net)
+
+
+def _run_expert(job: _Job, net: MultiGraphNet) -> dict[str, Any]:
+    cfg = job.cfg
+    student = LearnedPlanner(net)
+    m = _mission(job, _pipeline(student))
+    continuation = make_strategy("hier-heuristic").planner
+    rng = np.random.default_rng([job.seed, 7])
+    labels: list[ExpertLabel] = []
+    decisions = 0
+    while m.advance():
+        problem = m.pose()
+        if problem is None:
+            break
+        own = student.assign(problem)
+        if decisions % cfg.label_every == 0 and problem.n_clusters > 1:
+            cands = candidate_assignments(problem, own, student.heuristic, cfg.noisy_candidates, cfg.noise_m, rng)
+            if len(cands) > 1:
+                returns = lookahead_returns(m, cands, cfg.horizon_steps, continuation)
+                if np.ptp(returns) > 0:  # a decision where every candidate is as good teaches nothing
+                    g = student.affinity(problem)[0]
+                    labels.append(ExpertLabel(g, np.stack(cands), returns))
+        m.commit(own)  # DAgger: the student's own action moves the episode on
+        decisions += 1
+    return {"labels": labels, **_episode_stats(m, decisions)}
+
+
+def _run_ppo(job: _Job, net: MultiGraphNet) -> dict[str, Any]:
+    cfg = job.cfg
+    record: list[PolicyStep] = []
+    planner = LearnedPlanner(net, sample=True, rng=np.random.default_rng([job.seed, 11]), record=record)
+    m = _mission(job, _pipeline(planner))
+    rewards: list[float] = []
+    discounts: list[float] = []
+    last_step = 0
+    while True:
+        more = m.advance()
+        if record:  # close the interval of the previous decision
+            rewards.append(m.reward_since_decision)
+            discounts.append(cfg.gamma ** (m.steps - last_step))
+        if not more:
+            break
+        planner.value_extra = privileged_scalars(m)
+        n_before = len(record)
+        if m.pose() is None:
+            break
+        m.commit()
+        last_step = m.steps
+        if len(record) == n_before:  # no assignment was drawn (cannot happen after a posed problem)
+            raise MrExploreError("the sampling planner recorded no step")
+    if len(rewards) < len(record):  # the mission ended at a pose: the last interval is already closed
+        rewards.append(m.reward_since_decision)
+        discounts.append(0.0)
+    if m.done_reason != "max_steps" and discounts:
+        discounts[-1] = 0.0  # explored: nothing follows
+    return {
+        "steps_rec": record,
+        "rewards": np.asarray(rewards),
+        "discounts": np.asarray(discounts),
+        **_episode_stats(m, len(record)),
+    }
+
+
+def _init_worker() -> None:
+    os.environ[THREADS_ENV] = "1"
+    torch.set_num_threads(1)
+
+
+class _Runner:
+    """Runs jobs in local worker processes (spawned) or as Ray tasks; yields results as they finish."""
+
+    def __init__(self, workers: int, ray_address: str | None) -> None:
+        self.workers = workers or os.cpu_count() or 1
+        self.ray_address = ray_address
+        self._pool: ProcessPoolExecutor | None = None
+        self._remote: Any = None
+        self._ray_started = False
+
+    def __enter__(self) -> _Runner:
+        if self.ray_address is not None:
+            try:
+                import ray
+            except ImportError:
+                raise MrExploreError("--ray-address needs Ray; install it with: pip install 'mrexplore[ray]'") from None
+            if not ray.is_initialized():
+                kwargs: dict[str, Any] = (
+                    {"num_cpus": self.workers} if self.ray_address == "local" else {"address": self.ray_address}
+                )
+                ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
+                self._ray_started = True
+            env = {"env_vars": {THREADS_ENV: "1", "OMP_NUM_THREADS": "1"}}
+            self._remote = ray.remote(num_cpus=1, runtime_env=env)(_run_job)
+        elif self.workers > 1:
+            self._pool = ProcessPoolExecutor(
+                max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init_worker
+            )
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(cancel_futures=True)
+        if self._ray_started:
+            import ray
+
+            ray.shutdown()
+
+    def run(self, jobs: Sequence[_Job], deadline: float) -> Iterator[dict[str, Any]]:
+        """Results of ``jobs`` as they finish; jobs not started by ``deadline`` (perf_counter) are dropped."""
+        if self._remote is not None:
+            import ray
+
+            pending = [self._remote.remote(j) for j in jobs]
+            while pending:
+                done, pending = ray.wait(pending, num_returns=1)
+                yield ray.get(done[0])
+                if time.perf_counter() > deadline:
+                    for ref in pending:
+                        ray.cancel(ref)
+                    return
+        elif self._pool is not None:
+            futures: set[Future[dict[str, Any]]] = {self._pool.submit(_run_job, j) for j in jobs}
+            while futures:
+                done_f, futures = wait(futures, return_when=FIRST_COMPLETED)
+                for f in done_f:
+                    yield f.result()
+                if time.perf_counter() > deadline:
+                    for f in futures:
+                        f.cancel()
+                    futures = {f for f in futures if f.running()}
+                    deadline = math.inf  # let the running ones finish, start no more
+        else:
+            for j in jobs:
+                if time.perf_counter() > deadline:
+                    return
+                yield _run_job(j)
+
+
+# -- updates ----------------------------------------------------------------------------------------------
+def _pad_rows(rows: Sequence[np.ndarray], width: int, fill: float) -> np.ndarray:
+    out = np.full((len(rows), width), fill, dtype=np.asarray(rows[0]).dtype)
+    for i, r in enumerate(rows):
+        out[i, : len(r)] = r
+    return out
+
+
+def _label_batch(labels: Sequence[ExpertLabel]) -> tuple[Any, torch.Tensor, torch.Tensor, torch.Tensor]:
+    batch = collate([lab.inputs for lab in labels])
+    R = batch.robots.shape[1]
+    M = max(len(lab.candidates) for lab in labels)
+    cands = np.full((len(labels), M, R), -1, np.int64)
+    rets = np.zeros((len(labels), M))
+    valid = np.zeros((len(labels), M), bool)
+    for b, lab in enumerate(labels):
+        m, r = lab.candidates.shape
+        cands[b, :m, :r] = lab.candidates
+        rets[b, :m] = lab.returns
+        valid[b, :m] = True
+    return batch, torch.from_numpy(cands), torch.from_numpy(rets).float(), torch.from_numpy(valid)
+
+
+def _imitation_loss(
+    net: MultiGraphNet, labels: Sequence[ExpertLabel], temperature: float
+) -> tuple[torch.Tensor, float]:
+    """Listwise loss of a minibatch and the share of decisions where the student ranks the expert's best
+    candidate (or one as good) first."""
+    batch, cands, rets, valid = _label_batch(labels)
+    aff, _, _ = net(batch)
+    scores = assignment_score(aff, cands)
+    loss = listwise_loss(scores, rets, valid, temperature)
+    with torch.no_grad():
+        pick = torch.where(valid, scores, torch.full_like(scores, -1e9)).argmax(-1)
+        best = torch.where(valid, rets, torch.full_like(rets, -1e9)).max(-1).values
+        agree = float((rets.gather(1, pick[:, None]).squeeze(1) >= best - 1e-9).float().mean())
+    return loss, agree
+
+
+def _fit_imitation(
+    net: MultiGraphNet,
+    opt: torch.optim.Optimizer,
+    data: Sequence[ExpertLabel],
+    cfg: TrainConfig,
+    rng: np.random.Generator,
+) -> tuple[float, float]:
+    net.train()
+    losses, agrees = [], []
+    for _ in range(cfg.imitation_epochs):
+        order = rng.permutation(len(data))
+        for s in range(0, len(order), _BATCH):
+            loss, agree = _imitation_loss(net, [data[i] for i in order[s : s + _BATCH]], cfg.return_temperature)
+            opt.zero_grad()
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0)
+            opt.step()
+            losses.append(float(loss.detach()))
+            agrees.append(agree)
+    net.eval()
+    last = max(1, len(losses) // max(1, cfg.imitation_epochs))  # the last epoch's batches
+    return float(np.mean(losses[-last:])), float(np.mean(agrees[-last:]))
+
+
+def _ppo_update(
+    net: MultiGraphNet,
+    opt: torch.optim.Optimizer,
+    trajectories: Sequence[dict[str, Any]],
+    data: Sequence[ExpertLabel],
+    cfg: TrainConfig,
+    rng: np.random.Generator,
+) -> dict[str, float]:
+    steps: list[PolicyStep] = []
+    adv_all, ret_all = [], []
+    for tr in trajectories:
+        rec: list[PolicyStep] = tr["steps_rec"]
+        if not rec:
+            continue
+        values = np.array([s.value for s in rec])
+        adv, ret = gae(tr["rewards"] * cfg.reward_scale, values, tr["discounts"], 0.0, cfg.gae_lambda)
+        steps += rec
+        adv_all.append(adv)
+        ret_all.append(ret)
+    if not steps:
+        return {}
+    adv = np.concatenate(adv_all)
+    adv = (adv - adv.mean()) / (adv.std() + 1e-8)
+    ret = np.concatenate(ret_all)
+    net.train()
+    stats: list[dict[str, float]] = []
+    for _ in range(cfg.ppo_epochs):
+        order = rng.permutation(len(steps))
+        for s in range(0, len(order), _BATCH):
+            idx = order[s : s + _BATCH]
+            mb = [steps[i] for i in idx]
+            batch = collate([st.inputs for st in mb])
+            R = batch.robots.shape[1]
+            aff, vr, vc = net(batch)
+            v_new = net.value_of(vr, vc, batch, torch.from_numpy(np.stack([x.extra for x in mb])))
+            o = torch.from_numpy(_pad_rows([st.order for st in mb], R, -1))
+            c = torch.from_numpy(_pad_rows([st.choices for st in mb], R, -1))
+            logp, ent = sequential_log_prob(aff, o, c)
+            loss, st = ppo_loss(
+                logp,
+                torch.tensor([x.logp for x in mb], dtype=torch.float32),
+                torch.from_numpy(adv[idx]).float(),
+                v_new,
+                torch.from_numpy(ret[idx]).float(),
+                ent,
+                cfg.clip,
+                cfg.value_coef,
+                cfg.entropy_coef,
+            )
+            if data and cfg.imitation_coef > 0:
+                pick = rng.choice(len(data), size=min(_BATCH, len(data)), replace=False)
+                im, _ = _imitation_loss(net, [data[i] for i in pick], cfg.return_temperature)
+                loss = loss + cfg.imitation_coef * im
+            opt.zero_grad()
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0)
+            opt.step()
+            stats.append(
+                {"loss": float(loss), "kl": st.approx_kl, "clip_fraction": st.clip_fraction, "entropy": st.entropy}
+            )
+    net.eval()
+    return {k: float(np.mean([x[k] for x in stats])) for k in stats[0]}
+
+
+# -- the run ----------------------------------------------------------------------------------------------
+@dataclass
+class _State:
+    """What a resumed run needs besides the weights and the data (plain data: it goes into state.pt)."""
+
+    stage: int = 0
+    episodes: int = 0
+    elapsed_s: float = 0.0
+    best_val: float = math.inf
+    best_stage: str = ""
+    stage_rows: list[dict[str, Any]] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class TrainResult:
+    """Where a run left its policy and what each stage measured on the validation maps."""
+
+    policy_path: Path
+    best_stage: str
+    stages: list[dict[str, Any]]
+
+
+def _stages(cfg: TrainConfig) -> list[str]:
+    return (
+        ["baseline"] + [f"dagger{k}" for k in range(cfg.dagger_rounds)] + [f"ppo{k}" for k in range(cfg.ppo_iterations)]
+    )
+
+
+def _labels_to_blob(labels: Sequence[ExpertLabel]) -> list[dict[str, torch.Tensor]]:
+    t = torch.from_numpy
+    return [
+        {
+            "robots": t(lab.inputs.robots),
+            "clusters": t(lab.inputs.clusters),
+            "edges": t(lab.inputs.edges),
+            "reachable": t(lab.inputs.reachable),
+            "base": t(lab.inputs.base),
+            "candidates": t(lab.candidates),
+            "returns": t(lab.returns),
+        }  # fmt: skip
+        for lab in labels
+    ]
+
+
+def _labels_from_blob(blob: Sequence[dict[str, torch.Tensor]]) -> list[ExpertLabel]:
+    return [
+        ExpertLabel(
+            GraphInputs(
+                d["robots"].numpy(),
+                d["clusters"].numpy(),
+                d["edges"].numpy(),
+                d["reachable"].numpy(),
+                d["base"].numpy(),
+            ),
+            d["candidates"].numpy(),
+            d["returns"].numpy(),
+        )
+        for d in blob
+    ]
+
+
+class _Log:
+    """CSV log (always) and TensorBoard (where the optional extra is installed)."""
+
+    def __init__(self, out: Path) -> None:
+        self.path = out / "log.csv"
+        if not self.path.exists():
+            with open(self.path, "w", newline="") as f:
+                csv.writer(f).writerow(LOG_COLUMNS)
+        try:
+            from torch.utils.tensorboard import SummaryWriter
+
+            self.tb: Any = SummaryWriter(str(out / "tb"))
+        except ImportError:
+            self.tb = None
+
+    def row(self, values: dict[str, Any], step: int) -> None:
+        with open(self.path, "a", newline="") as f:
+            csv.writer(f).writerow(["" if values.get(k) is None else values.get(k) for k in LOG_COLUMNS])
+            f.flush()
+            os.fsync(f.fileno())
+        if self.tb is not None:
+            for k, v in values.items():
+                if isinstance(v, (int, float)) and k != "time_s":
+                    self.tb.add_scalar(k, v, step)
+            self.tb.flush()
+
+
+def _episode_jobs(
+    kind: str, n: int, maps: list[str], cfg: TrainConfig, rng: np.random.Generator, weights: bytes | None
+) -> list[_Job]:
+    jobs = []
+    for _ in range(n):
+        if not maps or rng.random() < cfg.generated_share:
+            spec = f"generated:{int(rng.integers(0, _VAL_SEED0))}"
+        else:
+            spec = maps[int(rng.integers(len(maps)))]
+        robots = int(rng.integers(cfg.robots_min, cfg.robots_max + 1))
+        jobs.append(_Job(kind, spec, robots, int(rng.integers(0, 2**31 - 1)), weights, cfg))
+    return jobs
+
+
+def train(
+    cfg: TrainConfig,
+    out: Path,
+    train_dir: Path | None,
+    minutes: float | None = None,
+    episodes: int | None = None,
+    workers: int = 0,
+    ray_address: str | None = None,
+    resume: bool = False,
+    seed: int = 0,
+    progress: bool | None = None,
+    say: Callable[[str], None] = lambda s: None,
+) -> TrainResult:
+    """Train the learned global layer into ``out`` (``policy.pt``, ``best.pt``, ``state.pt``, ``log.csv``,
+    ``stages.csv``). ``minutes`` and ``episodes`` bound the run (the later stages are skipped)."""
+    out = Path(out)
+    state_path = out / "state.pt"
+    if state_path.exists() and not resume:
+        raise MrExploreError(f"{out} already holds a training run; pass --resume to continue it, or another --out")
+    if resume and not state_path.exists():
+        raise MrExploreError(f"nothing to resume in {out} (no state.pt); drop --resume to start a run there")
+    out.mkdir(parents=True, exist_ok=True)
+    torch.manual_seed(seed)
+    net = MultiGraphNet(cfg.learned, VALUE_INPUTS)
+    opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
+    st = _State()
+    data: list[ExpertLabel] = []
+    rng = np.random.default_rng(seed)
+    if resume:
+        blob = torch.load(state_path, weights_only=True)
+        if blob["config"] != config_to_dict(cfg):
+            raise MrExploreError(
+                f"{out} was trained with another config; resume with the same --config, or a new --out"
+            )
+        net.load_state_dict(blob["net"])
+        opt.load_state_dict(blob["opt"])
+        st = _State(**blob["state"])
+        data = _labels_from_blob(blob["data"])
+        rng.bit_generator.state = blob["rng"]
+        done = f"{st.episodes} episodes, {st.elapsed_s / 60:.1f} min so far"
+        say(f"resuming {out} at stage {st.stage} of {len(_stages(cfg))} ({done})")
+    train_maps, val_maps = split_maps(train_dir, cfg.val_maps)
+    if not train_maps:
+        say("no training DungeonMaps found; training on procedural floor plans only")
+    log = _Log(out)
+    t_start = time.perf_counter() - st.elapsed_s
+    deadline = t_start + minutes * 60 if minutes is not None else math.inf
+    stages = _stages(cfg)
+    show = sys.stderr.isatty() if progress is None else progress
+    bar = tqdm(total=len(stages), initial=st.stage, unit="stage", disable=not show, desc="train")
+    with _Runner(workers, ray_address) as runner:
+
+        def budget_left(n: int) -> int:
+            return n if episodes is None else max(0, min(n, episodes - st.episodes))
+
+        def validate(weights: bytes | None) -> tuple[float, float]:
+            jobs = [_Job("eval", m, 3, i, weights, cfg) for i, m in enumerate(val_maps)]
+            res = list(runner.run(jobs, math.inf))
+            return float(np.mean([r["steps"] for r in res])), float(np.mean([r["coverage"] for r in res]))
+
+        while st.stage < len(stages):
+            stage = stages[st.stage]
+            if time.perf_counter() > deadline or (
+                episodes is not None and st.episodes >= episodes and stage != "baseline"
+            ):
+                say(f"budget spent before stage {stage}; stopping")
+                break
+            t0 = time.perf_counter()
+            row: dict[str, Any] = {"stage": stage}
+            if stage == "baseline":
+                # The untrained network is the heuristic (zero residual): its validation is the yardstick.
+                pass
+            elif stage.startswith("dagger"):
+                # collect: the student drives, the expert labels its decisions
+                jobs = _episode_jobs("expert", budget_left(cfg.episodes_per_round), train_maps, cfg, rng, _weights(net))
+                results = list(runner.run(jobs, deadline))
+                new = [lab for r in results for lab in r["labels"]]
+                data += new
+                st.episodes += len(results)
+                row |= _collect_row(results) | {"labels": len(data)}
+                # update: listwise imitation on everything gathered so far
+                if data:
+                    for g in opt.param_groups:
+                        g["lr"] = cfg.lr
+                    row["loss"], row["expert_agreement"] = _fit_imitation(net, opt, data, cfg, rng)
+            else:
+                jobs = _episode_jobs("ppo", budget_left(cfg.ppo_episodes), train_maps, cfg, rng, _weights(net))
+                results = list(runner.run(jobs, deadline))
+                st.episodes += len(results)
+                row |= _collect_row(results) | {
+                    "return_mean": float(np.mean([r["rewards"].sum() for r in results])) if results else None
+                }
+                for g in opt.param_groups:
+                    g["lr"] = cfg.ppo_lr
+                row |= _ppo_update(net, opt, results, data, cfg, rng)
+            # validate (deterministic decoding, held-out maps) and keep the best
+            weights = None if stage == "baseline" else _weights(net)
+            row["val_steps_mean"], row["val_coverage_mean"] = validate(weights)
+            if stage == "baseline" or (
+                row["val_steps_mean"] < st.best_val
+                and row["val_coverage_mean"] >= st.stage_rows[0]["val_coverage_mean"] - 0.005
+            ):
+                st.best_val, st.best_stage = row["val_steps_mean"], stage
+                save_policy(
+                    out / "best.pt",
+                    net,
+                    {"stage": stage, "val_steps_mean": row["val_steps_mean"], "train_config": config_to_dict(cfg)},
+                )
+            elapsed = time.perf_counter() - t0
+            row["time_s"] = round(time.perf_counter() - t_start, 1)
+            row["episodes"] = st.episodes
+            if row.get("decisions"):
+                row["decisions_per_s"] = round(row["decisions"] / elapsed, 2)
+            st.stage_rows.append(
+                {
+                    k: row.get(k)
+                    for k in (
+                        "stage",
+                        "episodes",
+                        "labels",
+                        "expert_agreement",
+                        "val_steps_mean",
+                        "val_coverage_mean",
+                        "time_s",
+                    )
+                }
+            )
+            log.row(row, st.stage)
+            val = f"{row['val_steps_mean']:.1f} steps, coverage {row['val_coverage_mean']:.4f}"
+            say(f"{stage}: validation {val} ({elapsed:.0f} s)")
+            # checkpoint: everything a resume needs, written atomically
+            st.stage += 1
+            st.elapsed_s = time.perf_counter() - t_start
+            blob = {
+                "config": config_to_dict(cfg), "net": net.state_dict(), "opt": opt.state_dict(),
+                "state": st.__dict__, "data": _labels_to_blob(data), "rng": rng.bit_generator.state,
+                "code_version": code_version(),
+            }  # fmt: skip
+            tmp = state_path.with_name("state.pt.tmp")
+            torch.save(blob, tmp)
+            tmp.replace(state_path)
+            bar.update()
+    bar.close()
+    shutil.copyfile(out / "best.pt", out / "policy.pt")
+    with open(out / "stages.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(st.stage_rows[0]))
+        w.writeheader()
+        w.writerows(st.stage_rows)
+    return TrainResult(out / "policy.pt", st.best_stage, st.stage_rows)
+
+
+def _collect_row(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    if not results:
+        return {}
+    return {
+        "decisions": int(sum(r["decisions"] for r in results)),
+        "steps_mean": float(np.mean([r["steps"] for r in results])),
+        "coverage_mean": float(np.mean([r["coverage"] for r in results])),
+    }
