@@ -304,12 +304,12 @@ class TrainConfig:
     """Step budget of a training episode, >= 1."""
     generated_share: float = 0.5
     """Share of training episodes on procedural floor plans (the rest on training DungeonMaps), in [0, 1]."""
-    val_maps: int = 10
+    val_maps: int = 16
     """Validation episodes per evaluation: half held-out training DungeonMaps, half held-out floor plans, >= 1."""
     # -- imitation of the lookahead expert
-    dagger_rounds: int = 3
+    dagger_rounds: int = 5
     """Rounds of (collect on the student's own states, fit), >= 0; round 0's student is the heuristic."""
-    episodes_per_round: int = 16
+    episodes_per_round: int = 32
     """Training episodes collected per DAgger round, >= 1."""
     label_every: int = 2
     """Every this many decisions of an episode the expert labels (the others just move it on), >= 1."""
@@ -326,9 +326,9 @@ class TrainConfig:
     lr: float = 1e-3
     """Adam learning rate of imitation, > 0."""
     # -- PPO on eq. 9
-    ppo_iterations: int = 2
+    ppo_iterations: int = 6
     """PPO iterations after imitation (0: none), >= 0."""
-    ppo_episodes: int = 8
+    ppo_episodes: int = 16
     """Episodes collected per PPO iteration, >= 1."""
     ppo_epochs: int = 4
     """Passes over a PPO batch, >= 1."""

@@ -54,7 +54,7 @@ from mrexplore.types import MrExploreError
 __all__ = ["train", "TrainResult", "split_maps", "LOG_COLUMNS"]
 
 LOG_COLUMNS = [
-    "time_s", "stage", "episodes", "decisions", "labels", "loss", "expert_agreement", "kl", "clip_fraction",
+    "time_s", "stage", "episodes", "decisions", "labels", "loss", "expert_agreement", "expert_gain", "kl", "clip_fraction",
     "entropy", "return_mean", "steps_mean", "coverage_mean", "val_steps_mean", "val_coverage_mean",
     "decisions_per_s",
 ]  # fmt: skip
@@ -156,6 +156,7 @@ def _run_expert(job: _Job, net: MultiGraphNet) -> dict[str, Any]:
     continuation = make_strategy("hier-heuristic").planner
     rng = np.random.default_rng([job.seed, 7])
     labels: list[ExpertLabel] = []
+    gains: list[float] = []
     decisions = 0
     while m.advance():
         problem = m.pose()
@@ -166,12 +167,13 @@ def _run_expert(job: _Job, net: MultiGraphNet) -> dict[str, Any]:
             cands = candidate_assignments(problem, own, student.heuristic, cfg.noisy_candidates, cfg.noise_m, rng)
             if len(cands) > 1:
                 returns = lookahead_returns(m, cands, cfg.horizon_steps, continuation)
+                gains.append(float(returns.max() - returns[0]))  # candidate 0 is the student's own
                 if np.ptp(returns) > 0:  # a decision where every candidate is as good teaches nothing
                     g = student.affinity(problem)[0]
                     labels.append(ExpertLabel(g, np.stack(cands), returns))
         m.commit(own)  # DAgger: the student's own action moves the episode on
         decisions += 1
-    return {"labels": labels, **_episode_stats(m, decisions)}
+    return {"labels": labels, "gains": gains, **_episode_stats(m, decisions)}
 
 
 def _run_ppo(job: _Job, net: MultiGraphNet) -> dict[str, Any]:
@@ -592,7 +594,11 @@ def train(
                 new = [lab for r in results for lab in r["labels"]]
                 data += new
                 st.episodes += len(results)
-                row |= _collect_row(results) | {"labels": len(data)}
+                gains = [g for r in results for g in r["gains"]]
+                row |= _collect_row(results) | {
+                    "labels": len(data),
+                    "expert_gain": float(np.mean(gains)) if gains else None,
+                }
                 # update: listwise imitation on everything gathered so far
                 if data:
                     for g in opt.param_groups:
@@ -633,6 +639,7 @@ def train(
                         "stage",
                         "episodes",
                         "labels",
+                        "expert_gain",
                         "expert_agreement",
                         "val_steps_mean",
                         "val_coverage_mean",
