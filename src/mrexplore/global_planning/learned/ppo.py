@@ -84,7 +84,7 @@ def ppo_loss(
     with torch.no_grad():
         kl = float((old_logp - new_logp).mean())
         clipped = float(((ratio - 1).abs() > clip).float().mean())
-    return loss, PPOStats(float(policy), float(value), float(ent), kl, clipped)
+    return loss, PPOStats(float(policy.detach()), float(value.detach()), float(ent.detach()), kl, clipped)
 
 
 def listwise_loss(scores: Tensor, returns: Tensor, valid: Tensor, temperature: float) -> Tensor:

@@ -1,0 +1,53 @@
+"""The network's inputs on a hand-drawn decision: every edge feature checkable by hand."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mrexplore.config import GlobalPlanningConfig, LearnedConfig
+from mrexplore.global_planning.learned.features import graph_inputs
+from mrexplore.global_planning.protocol import AssignmentProblem
+from mrexplore.preprocessing.clustering import Clusters
+
+
+def _problem(current: list[int] | None = None) -> AssignmentProblem:
+    # Two robots at (0, 0) and (0, 4); three clusters at (0, 10), (0, 14) and (8, 0); 1 m cells.
+    centres = np.array([[0, 10], [0, 14], [8, 0]], np.int32)
+    sizes = np.array([5, 10, 2], np.int32)
+    members = np.repeat(centres, sizes, axis=0)
+    labels = np.repeat(np.arange(3, dtype=np.int32), sizes)
+    dist = np.array([[10.0, 14.0, 8.0], [6.0, 10.0, np.inf]])
+    return AssignmentProblem(
+        np.array([[0, 0], [0, 4]], np.int32),
+        Clusters(centres, sizes, members, labels),
+        dist,
+        1.0,
+        np.zeros((9, 15), np.uint8),
+        current_cluster=None if current is None else np.array(current, np.int64),
+    )
+
+
+def test_edge_features_by_hand() -> None:
+    g = graph_inputs(_problem([1, -1]), LearnedConfig(distance_scale_m=2.0, size_scale_m=5.0), GlobalPlanningConfig())
+    e = g.edges
+    assert e[..., 0].tolist() == [[5.0, 7.0, 4.0], [3.0, 5.0, 10.0]]  # d / 2 m; unreachable clipped to 10
+    assert e[0, :, 1].tolist() == pytest.approx([1.0, 2.0, 0.4])  # |C_k| x 1 m / 5 m
+    # advantage: d_ik - the other robot's d_jk, halved: robot 0 is 2 m behind for both near clusters
+    assert e[..., 2].tolist() == [[2.0, 2.0, -6.0], [-2.0, -2.0, 6.0]]
+    assert e[..., 3].tolist() == [[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]  # robot 0's goal lies in cluster 1
+    # isolation: straight line to the nearest other centre, halved: 4 m, 4 m, sqrt(64 + 100) m
+    assert e[0, :, 4].tolist() == pytest.approx([2.0, 2.0, np.sqrt(164) / 2])
+    assert g.reachable.tolist() == [[True, True, True], [True, True, False]]
+    # base: -(3 d - 1 x size) / 3
+    assert g.base[0].tolist() == pytest.approx([-(30 - 5) / 3, -(42 - 10) / 3, -(24 - 2) / 3])
+    assert g.base[1, 2] == 0.0
+    # nodes: metres from the robots' centroid (0, 2) over 2 m; robots labelled 1
+    assert g.robots.tolist() == [[0.0, -1.0, 1.0], [0.0, 1.0, 1.0]]
+    assert g.clusters[2].tolist() == pytest.approx([4.0, -1.0, 0.0, 0.4])
+
+
+def test_switched_off_features_are_zero() -> None:
+    cfg = LearnedConfig(use_advantage=False, use_current_goal=False, use_isolation=False)
+    g = graph_inputs(_problem([1, 0]), cfg, GlobalPlanningConfig())
+    assert not g.edges[..., 2:].any()

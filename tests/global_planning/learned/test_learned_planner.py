@@ -1,0 +1,110 @@
+"""The learned planner as a strategy: the untrained network is exactly utility + Hungarian, the shipped
+policy loads and explores, checkpoints round-trip, bad files give one clear error."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from mrexplore.config import LearnedConfig, MapConfig, SimConfig
+from mrexplore.global_planning.classical import UtilityPlanner
+from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS, load_policy, save_policy
+from mrexplore.global_planning.learned.network import MultiGraphNet
+from mrexplore.global_planning.learned.policy import LearnedPlanner
+from mrexplore.global_planning.protocol import AssignmentProblem
+from mrexplore.maps.loaders import load_map
+from mrexplore.mission import Mission, run_mission
+from mrexplore.preprocessing.clustering import Clusters
+from mrexplore.strategies import make_strategy
+from mrexplore.types import MrExploreError
+
+TIMING = {"wall_s", "plan_ms_mean", "plan_ms_p95"}
+
+
+def _untrained() -> MultiGraphNet:
+    torch.manual_seed(0)
+    return MultiGraphNet(LearnedConfig(), VALUE_INPUTS).eval()
+
+
+def test_zero_residual_start_equals_utility_on_random_problems() -> None:
+    rng = np.random.default_rng(0)
+    planner, utility = LearnedPlanner(_untrained()), UtilityPlanner()
+    for _ in range(200):
+        R, C = int(rng.integers(1, 9)), int(rng.integers(1, 12))
+        centres = rng.integers(0, 50, size=(C, 2)).astype(np.int32)
+        sizes = rng.integers(2, 40, size=C).astype(np.int32)
+        dist = rng.integers(1, 60, size=(R, C)).astype(np.float64)  # whole cells: many exact ties
+        dist[rng.random((R, C)) < 0.2] = np.inf
+        clusters = Clusters(
+            centres, sizes, np.repeat(centres, sizes, 0), np.repeat(np.arange(C, dtype=np.int32), sizes)
+        )
+        p = AssignmentProblem(
+            rng.integers(0, 50, size=(R, 2)).astype(np.int32), clusters, dist, 0.1, np.zeros((50, 50), np.uint8)
+        )
+        assert planner.assign(p).cluster_of_robot.tolist() == utility.assign(p).cluster_of_robot.tolist()
+
+
+def test_zero_residual_hier_runs_exactly_as_hier_heuristic(tmp_path: Path) -> None:
+    save_policy(tmp_path / "zero.pt", _untrained())
+    truth = load_map("generated:5", MapConfig(resolution_m=0.1))
+    a = run_mission(truth, make_strategy("hier", policy=str(tmp_path / "zero.pt")), SimConfig(robots=3), seed=2)
+    b = run_mission(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=2)
+    da, db = a.measures.to_dict(), b.measures.to_dict()
+    assert {k: v for k, v in da.items() if k not in TIMING} == {k: v for k, v in db.items() if k not in TIMING}
+
+
+def test_shipped_policy_loads_by_default_and_explores() -> None:
+    s = make_strategy("hier")
+    assert s.policy is not None and s.policy["path"].endswith("pretrained/policy.pt") and len(s.policy["sha256"]) == 64
+    assert Path(s.policy["path"]).stat().st_size < 2_000_000
+    m = run_mission(load_map("generated:3", MapConfig(resolution_m=0.1)), s, SimConfig(robots=2), seed=1).measures
+    assert m.coverage >= 0.99
+
+
+def test_checkpoint_round_trip(tmp_path: Path) -> None:
+    net = _untrained()
+    torch.nn.init.normal_(net.score[-1].weight)
+    save_policy(tmp_path / "p.pt", net, {"note": "x"})
+    loaded = load_policy(tmp_path / "p.pt")
+    for (k, a), (_, b) in zip(net.state_dict().items(), loaded.net.state_dict().items(), strict=True):
+        assert torch.equal(a, b), k
+    assert loaded.meta["meta"] == {"note": "x"} and loaded.net.cfg == net.cfg
+
+
+def test_bad_policy_files_give_one_line_errors(tmp_path: Path) -> None:
+    with pytest.raises(MrExploreError, match=r"^policy file .*nope.pt not found; pass a file written by"):
+        load_policy(tmp_path / "nope.pt")
+    (tmp_path / "junk.pt").write_bytes(b"not a checkpoint")
+    with pytest.raises(MrExploreError, match=r"^policy file .*junk.pt is not a mrexplore policy \(.*\); retrain it$"):
+        load_policy(tmp_path / "junk.pt")
+    torch.save({"format": "other"}, tmp_path / "other.pt")
+    with pytest.raises(MrExploreError, match=r"is not a mrexplore policy \(no format tag\)"):
+        load_policy(tmp_path / "other.pt")
+
+
+def test_snapshot_restore_replays_exactly_and_pose_commit_equals_decide() -> None:
+    truth = load_map("generated:2", MapConfig(resolution_m=0.1))
+
+    def finish(m: Mission) -> dict:
+        while m.advance():
+            m.decide()
+        return {k: v for k, v in m.result().measures.to_dict().items() if k not in TIMING}
+
+    m = Mission(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=4, progress=False)
+    for _ in range(5):
+        assert m.advance()
+        m.decide()
+    assert m.advance()
+    snap = m.snapshot()
+    first = finish(m)
+    m.restore(snap)
+    assert finish(m) == first
+    # the same decisions taken in two halves
+    m2 = Mission(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=4, progress=False)
+    while m2.advance():
+        if m2.pose() is not None:
+            m2.commit()
+    assert {k: v for k, v in m2.result().measures.to_dict().items() if k not in TIMING} == first
