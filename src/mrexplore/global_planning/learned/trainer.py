@@ -54,8 +54,8 @@ from mrexplore.types import MrExploreError
 __all__ = ["train", "TrainResult", "split_maps", "LOG_COLUMNS"]
 
 LOG_COLUMNS = [
-    "time_s", "stage", "episodes", "decisions", "labels", "loss", "expert_agreement", "expert_gain", "kl", "clip_fraction",
-    "entropy", "return_mean", "steps_mean", "coverage_mean", "val_steps_mean", "val_coverage_mean",
+    "time_s", "stage", "episodes", "decisions", "labels", "loss", "expert_agreement", "expert_gain", "kl",
+    "clip_fraction", "entropy", "return_mean", "steps_mean", "coverage_mean", "val_steps_mean", "val_coverage_mean",
     "decisions_per_s",
 ]  # fmt: skip
 _VAL_SEED0 = 1_000_000
