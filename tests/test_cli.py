@@ -82,7 +82,7 @@ def test_given_starts(capsys) -> None:
         ),
         (
             ["--strategy", "greedy"],
-            "mrexplore: error: unknown strategy 'greedy'; choose one of hier, nearest, utility, coscan, oracle",
+            "mrexplore: error: unknown strategy 'greedy'; choose one of hier, hier-heuristic, nearest, utility, coscan, oracle",
         ),
         (
             ["--start", "0.01,0.01"],
@@ -137,3 +137,39 @@ def test_saved_centre_map_loads_back(tmp_path, capsys) -> None:
     assert main(["explore", "--map", str(tmp_path / "centre.yaml"), "--resolution", "0.1", "--json"]) == 0
     again = json.loads(capsys.readouterr().out)
     assert again["map"] == "centre" and again["coverage"] >= 0.99 and rec["coverage"] >= 0.99
+
+
+def test_train_smoke_then_explore_with_that_policy(tmp_path, capsys) -> None:
+    cfg = tmp_path / "tiny.yaml"
+    cfg.write_text(
+        "resolution_m: 0.2\nrobots_max: 2\nmax_steps: 60\nval_maps: 1\ndagger_rounds: 1\nepisodes_per_round: 1\n"
+        "horizon_steps: 15\nimitation_epochs: 1\nppo_iterations: 0\nlearned:\n  hidden: 8\n"
+    )
+    out = tmp_path / "run"
+    args = ["train", "--out", str(out), "--config", str(cfg), "--workers", "1", "--train-maps", str(tmp_path / "none")]
+    assert main(args) == 0
+    captured = capsys.readouterr()
+    assert "kept stage" in captured.out and "procedural floor plans only" in captured.err
+    assert (out / "policy.pt").is_file() and (out / "log.csv").is_file()
+    assert main(["explore", *FAST, "--strategy", "hier", "--policy", str(out / "policy.pt"), "--json"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    import hashlib
+
+    assert rec["policy"]["sha256"] == hashlib.sha256((out / "policy.pt").read_bytes()).hexdigest()
+    assert rec["coverage"] >= 0.99
+
+
+def test_train_and_policy_errors_are_one_line(tmp_path, capsys) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("horizon: 3\n")
+    assert main(["train", "--out", str(tmp_path / "o"), "--config", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("mrexplore: error: unknown TrainConfig keys horizon; known: learned, resolution_m")
+    assert err.count("\n") == 1
+    assert main(["train", "--out", str(tmp_path / "o"), "--config", str(tmp_path / "missing.yaml")]) == 2
+    assert "--config file" in capsys.readouterr().err
+    assert main(["explore", *FAST, "--policy", str(tmp_path / "none.pt")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("mrexplore: error: policy file") and "not found" in err and err.count("\n") == 1
+    assert main(["train", "--out", str(tmp_path / "o"), "--minutes", "0"]) == 2
+    assert capsys.readouterr().err == "mrexplore: error: --minutes must be > 0, got 0.0\n"

@@ -407,7 +407,12 @@ def _ppo_update(
             torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0)
             opt.step()
             stats.append(
-                {"loss": float(loss), "kl": st.approx_kl, "clip_fraction": st.clip_fraction, "entropy": st.entropy}
+                {
+                    "loss": float(loss.detach()),
+                    "kl": st.approx_kl,
+                    "clip_fraction": st.clip_fraction,
+                    "entropy": st.entropy,
+                }
             )
     net.eval()
     return {k: float(np.mean([x[k] for x in stats])) for k in stats[0]}

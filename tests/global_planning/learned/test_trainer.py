@@ -1,0 +1,70 @@
+"""The trainer end to end on tiny budgets: stages, logs, checkpoints, resume after a stop, refusals."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import pytest
+import torch
+
+from mrexplore.config import TrainConfig
+from mrexplore.global_planning.learned.checkpoint import load_policy
+from mrexplore.global_planning.learned.trainer import LOG_COLUMNS, split_maps, train
+from mrexplore.types import MrExploreError
+
+TINY = TrainConfig(
+    resolution_m=0.2,
+    robots_min=2,
+    robots_max=2,
+    max_steps=80,
+    val_maps=1,
+    dagger_rounds=1,
+    episodes_per_round=1,
+    horizon_steps=20,
+    noisy_candidates=1,
+    imitation_epochs=1,
+    ppo_iterations=1,
+    ppo_episodes=1,
+    ppo_epochs=1,
+)
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_stop_and_resume_runs_every_stage_once(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    first = train(TINY, out, None, episodes=1, workers=1, seed=3)  # baseline and dagger0, then the budget ends
+    assert [r["stage"] for r in first.stages] == ["baseline", "dagger0"]
+    with pytest.raises(MrExploreError, match=r"already holds a training run; pass --resume to continue it"):
+        train(TINY, out, None, workers=1)
+    with pytest.raises(MrExploreError, match=r"was trained with another config; resume with the same --config"):
+        train(TrainConfig(), out, None, workers=1, resume=True)
+    second = train(TINY, out, None, workers=1, seed=3, resume=True)
+    assert [r["stage"] for r in second.stages] == ["baseline", "dagger0", "ppo0"]
+    log = _rows(out / "log.csv")
+    assert [r["stage"] for r in log] == ["baseline", "dagger0", "ppo0"] and list(log[0]) == LOG_COLUMNS
+    assert [r["stage"] for r in _rows(out / "stages.csv")] == ["baseline", "dagger0", "ppo0"]
+    state = torch.load(out / "state.pt", weights_only=True)
+    assert state["state"]["stage"] == 3 and state["state"]["episodes"] == 2
+    policy = load_policy(out / "policy.pt")
+    assert policy.meta["meta"]["stage"] == second.best_stage
+
+
+def test_nothing_to_resume(tmp_path: Path) -> None:
+    with pytest.raises(MrExploreError, match=r"nothing to resume in .* \(no state.pt\); drop --resume"):
+        train(TINY, tmp_path, None, resume=True)
+
+
+def test_validation_maps_are_held_out(tmp_path: Path) -> None:
+    folder = tmp_path / "dungeon"
+    folder.mkdir()
+    for i in range(40):
+        (folder / f"train_{i:03d}.png").write_bytes(b"")
+    train_maps, val = split_maps(tmp_path, 6)
+    assert len(train_maps) == 37 and not set(train_maps) & set(val)
+    assert val[:3] == [str(folder / f"train_{i:03d}.png") for i in (37, 38, 39)]
+    assert val[3:] == ["generated:1000000", "generated:1000001", "generated:1000002"]
