@@ -82,7 +82,8 @@ def test_given_starts(capsys) -> None:
         ),
         (
             ["--strategy", "greedy"],
-            "mrexplore: error: unknown strategy 'greedy'; choose one of hier, hier-heuristic, nearest, utility, coscan, oracle",
+            "mrexplore: error: unknown strategy 'greedy'; choose one of "
+            "hier, hier-heuristic, nearest, utility, coscan, oracle",
         ),
         (
             ["--start", "0.01,0.01"],
