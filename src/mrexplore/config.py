@@ -307,11 +307,11 @@ class TrainConfig:
     val_maps: int = 16
     """Validation episodes per evaluation: half held-out training DungeonMaps, half held-out floor plans, >= 1."""
     # -- imitation of the lookahead expert
-    dagger_rounds: int = 5
+    dagger_rounds: int = 4
     """Rounds of (collect on the student's own states, fit), >= 0; round 0's student is the heuristic."""
-    episodes_per_round: int = 32
+    episodes_per_round: int = 12
     """Training episodes collected per DAgger round, >= 1."""
-    label_every: int = 2
+    label_every: int = 3
     """Every this many decisions of an episode the expert labels (the others just move it on), >= 1."""
     horizon_steps: int = 120
     """Each expert candidate is run this many simulation steps forward, >= 1."""
@@ -326,9 +326,9 @@ class TrainConfig:
     lr: float = 1e-3
     """Adam learning rate of imitation, > 0."""
     # -- PPO on eq. 9
-    ppo_iterations: int = 6
+    ppo_iterations: int = 4
     """PPO iterations after imitation (0: none), >= 0."""
-    ppo_episodes: int = 16
+    ppo_episodes: int = 12
     """Episodes collected per PPO iteration, >= 1."""
     ppo_epochs: int = 4
     """Passes over a PPO batch, >= 1."""

@@ -1,0 +1,86 @@
+"""Learned global layer speed: policy inference per decision, and a whole decision of learned hier against
+utility and hier-heuristic on the largest HouseExpo map.
+
+Run: python perf/bench_policy.py [--robots 8] [--clusters 60] [--steps 300]
+Targets on the 2-core dev machine: inference <= 5 ms per decision at 8 robots and 60 clusters; a decision
+of learned hier at 8 robots no slower than 1.2x utility's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import numpy as np
+
+from mrexplore.config import MissionConfig, SimConfig
+from mrexplore.global_planning.learned.checkpoint import load_policy
+from mrexplore.global_planning.learned.policy import LearnedPlanner
+from mrexplore.global_planning.protocol import AssignmentProblem
+from mrexplore.maps.loaders import load_map
+from mrexplore.mission import Mission
+from mrexplore.preprocessing.clustering import Clusters
+from mrexplore.strategies import make_strategy
+
+sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+from bench_step_and_decision import HOUSEEXPO, largest_houseexpo  # noqa: E402
+
+
+def inference_ms(robots: int, clusters: int, repeats: int = 200) -> tuple[float, float]:
+    """Median and p95 ms of the learned planner's assign() (features, network, Hungarian) on random problems."""
+    rng = np.random.default_rng(0)
+    planner = LearnedPlanner(load_policy().net)
+    times = []
+    for _ in range(repeats):
+        centres = rng.integers(0, 400, size=(clusters, 2)).astype(np.int32)
+        sizes = rng.integers(2, 80, size=clusters).astype(np.int32)
+        labels = np.repeat(np.arange(clusters, dtype=np.int32), sizes)
+        c = Clusters(centres, sizes, np.repeat(centres, sizes, 0), labels)
+        dist = rng.uniform(5, 400, size=(robots, clusters))
+        p = AssignmentProblem(
+            rng.integers(0, 400, size=(robots, 2)).astype(np.int32),
+            c,
+            dist,
+            0.05,
+            np.zeros((400, 400), np.uint8),
+            current_cluster=rng.integers(-1, clusters, size=robots),
+        )
+        t = time.perf_counter()
+        planner.assign(p)
+        times.append((time.perf_counter() - t) * 1e3)
+    return float(np.median(times[10:])), float(np.percentile(times[10:], 95))
+
+
+def decision_ms(strategy: str, robots: int, steps: int) -> float:
+    """Median ms of the centre's decisions over the first ``steps`` steps of a mission."""
+    truth = load_map(largest_houseexpo())
+    m = Mission(truth, make_strategy(strategy), SimConfig(robots=robots), MissionConfig(steps, 10), 0, progress=False)
+    while m.advance():
+        m.decide()
+    return float(np.median(m.plan_ms))
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--robots", type=int, default=8)
+    ap.add_argument("--clusters", type=int, default=60)
+    ap.add_argument("--steps", type=int, default=300)
+    args = ap.parse_args()
+    inference_ms(2, 5, 20)  # warm up torch
+    med, p95 = inference_ms(args.robots, args.clusters)
+    print(f"policy inference, {args.robots} robots x {args.clusters} clusters: {med:.2f} ms median, {p95:.2f} ms p95")
+    if not HOUSEEXPO.is_dir():
+        print(f"skipped the decision timings: HouseExpo maps not found at {HOUSEEXPO}", file=sys.stderr)
+        return 0
+    decision_ms("utility", 2, 20)  # compile the numba kernels outside the timings
+    print(f"decision on {largest_houseexpo().stem}, {args.robots} robots, first {args.steps} steps (median ms):")
+    base = decision_ms("utility", args.robots, args.steps)
+    for s in ("utility", "hier-heuristic", "hier"):
+        ms = base if s == "utility" else decision_ms(s, args.robots, args.steps)
+        print(f"  {s:15s} {ms:7.2f}  ({ms / base:.2f}x utility)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
