@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from mrexplore.bench.report import bound_table, bytes_table, steps_table
+import pytest
+
+from mrexplore.bench.report import bound_table, bytes_table, paired_bootstrap, paired_table, steps_table
 
 
 def row(strategy: str, steps: int, cls: str = "small", **extra: str) -> dict[str, str]:
@@ -57,3 +59,22 @@ def test_bytes_table_reductions() -> None:
 
 def test_bound_ratio() -> None:
     assert "| hier | 1.80× |" in bound_table([row("hier", 80), row("hier", 100)], ["hier"])
+
+
+def test_paired_bootstrap_by_hand() -> None:
+    est, lo, hi = paired_bootstrap([80.0, 100.0, 90.0], [100.0, 100.0, 100.0])
+    assert est == pytest.approx(10.0)  # (100 - 90) / 100
+    assert 0.0 <= lo <= est <= hi <= 20.0  # resampling pairs of saved 20, 0 and 10 %
+    assert paired_bootstrap([90.0, 90.0], [100.0, 100.0]) == (10.0, 10.0, 10.0)
+    with pytest.raises(ValueError, match="two equal, non-empty samples, got 2 and 1"):
+        paired_bootstrap([1.0, 2.0], [1.0])
+
+
+def test_paired_table_pairs_episodes_of_the_same_map_team_and_seed() -> None:
+    def row(strategy: str, seed: int, steps: int) -> dict[str, str]:
+        return {"map_path": "m", "robots": "3", "seed": str(seed), "strategy": strategy, "steps": str(steps),
+                "coverage": "1.0", "dataset": "dungeon", "size_class": "large"}  # fmt: skip
+
+    rows = [row("a", 0, 90), row("b", 0, 100), row("a", 1, 90), row("b", 1, 100), row("b", 2, 500)]
+    table = paired_table(rows, "a", ["a", "b"])
+    assert "| dungeon large | +10.0 [+10.0, +10.0] | +0.00 | 2 |" in table  # seed 2 has no pair
