@@ -29,6 +29,7 @@ from tqdm import tqdm
 
 from mrexplore.config import MapConfig, MissionConfig, SimConfig, TrainConfig, config_to_dict
 from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS, code_version, save_policy
+from mrexplore.global_planning.learned.curve import plot_learning_curve
 from mrexplore.global_planning.learned.expert import (
     ExpertLabel,
     candidate_assignments,
@@ -534,7 +535,7 @@ def train(
     say: Callable[[str], None] = lambda s: None,
 ) -> TrainResult:
     """Train the learned global layer into ``out`` (``policy.pt``, ``best.pt``, ``state.pt``, ``log.csv``,
-    ``stages.csv``). ``minutes`` and ``episodes`` bound the run (the later stages are skipped)."""
+    ``stages.csv``, ``curve.png``). ``minutes`` and ``episodes`` bound the run (the later stages are skipped)."""
     out = Path(out)
     state_path = out / "state.pt"
     if state_path.exists() and not resume:
@@ -669,6 +670,7 @@ def train(
             bar.update()
     bar.close()
     shutil.copyfile(out / "best.pt", out / "policy.pt")
+    plot_learning_curve(out / "log.csv", out / "curve.png")
     with open(out / "stages.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(st.stage_rows[0]))
         w.writeheader()

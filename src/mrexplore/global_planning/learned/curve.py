@@ -1,0 +1,47 @@
+"""The learning-curve picture of a training run, from its log.csv (needs matplotlib, the plot extra)."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+__all__ = ["plot_learning_curve"]
+
+
+def plot_learning_curve(log_csv: Path, png: Path) -> bool:
+    """Validation steps and coverage per stage, with the expert's agreement and gain on the way; returns
+    False (writing nothing) where matplotlib is not installed."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return False
+    with open(log_csv, newline="") as f:
+        rows = list(csv.DictReader(f))
+    stages = [r["stage"] for r in rows]
+    x = list(range(len(rows)))
+
+    def col(name: str) -> list[float]:
+        return [float(r[name]) if r.get(name) else float("nan") for r in rows]
+
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    ax1.plot(x, col("val_steps_mean"), "o-", color="tab:blue", label="validation steps (mean, deterministic)")
+    ax1.axhline(col("val_steps_mean")[0], color="grey", ls="--", lw=1, label="heuristic start (hier-heuristic)")
+    ax1.set_ylabel("steps")
+    ax1.legend(loc="upper right", fontsize=8)
+    ax1.set_title(f"training run {Path(log_csv).parent.name}")
+    ax2.plot(x, col("expert_agreement"), "s-", color="tab:green", label="expert agreement (training data)")
+    ax2.set_ylabel("share")
+    ax2.set_ylim(0, 1)
+    ax3 = ax2.twinx()
+    ax3.plot(x, col("expert_gain"), "^-", color="tab:red", label="expert gain over student (eq. 9 return)")
+    ax3.set_ylabel("return")
+    lines = ax2.get_lines() + ax3.get_lines()
+    ax2.legend(lines, [ln.get_label() for ln in lines], loc="lower right", fontsize=8)
+    ax2.set_xticks(x, stages, rotation=30)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+    return True
