@@ -1,0 +1,83 @@
+"""Headroom of the lookahead expert: whole episodes where it takes every decision, against hier-heuristic on
+the same maps, seeds and starts (paired), per dataset.
+
+Run: python perf/expert_headroom.py [--maps 6] [--robots 3] [--seeds 1] [--workers 2]
+It picks the first ``--maps`` maps by name of each dev dataset (HouseExpo PNGs, DungeonMaps) at 0.1 m. The
+expert may use the simulator (training only): at each decision it runs its candidates (the heuristic's,
+nearest's and noisy utility assignments) forward over the training horizon and takes the best return.
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from mrexplore.bench.report import paired_bootstrap
+from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig, TrainConfig
+from mrexplore.global_planning.learned.expert import candidate_assignments, lookahead_returns
+from mrexplore.global_planning.protocol import Assignment
+from mrexplore.maps.loaders import load_map
+from mrexplore.mission import Mission
+from mrexplore.strategies import make_strategy
+
+MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
+
+
+def episode(args: tuple[str, int, int, bool]) -> int:
+    """Steps of one episode, the expert deciding (True) or hier-heuristic alone (False)."""
+    path, robots, seed, expert = args
+    cfg = TrainConfig()
+    truth = load_map(path, MapConfig(resolution_m=cfg.resolution_m))
+    pipeline = make_strategy("hier-heuristic")
+    m = Mission(truth, pipeline, SimConfig(robots=robots), MissionConfig(max_steps=2000), seed, progress=False)
+    rng = np.random.default_rng(seed)
+    while m.advance():
+        problem = m.pose()
+        if problem is None:
+            break
+        own = pipeline.planner.assign(problem)
+        if expert:
+            heuristic = GlobalPlanningConfig()
+            cands = candidate_assignments(problem, own, heuristic, cfg.noisy_candidates, cfg.noise_m, rng)
+            if len(cands) > 1:
+                returns = lookahead_returns(m, cands, cfg.horizon_steps, pipeline.planner)
+                own = Assignment(cands[int(np.argmax(returns))])
+        m.commit(own)
+    return m.steps
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--maps", type=int, default=6)
+    ap.add_argument("--robots", type=int, default=3)
+    ap.add_argument("--seeds", type=int, default=1)
+    ap.add_argument("--workers", type=int, default=2)
+    args = ap.parse_args()
+    if not MAPS.is_dir():
+        print(f"skipped: dev maps not found at {MAPS}", file=sys.stderr)
+        return 0
+    sets = {
+        "houseexpo": sorted((MAPS / "houseexpo" / "png").glob("*.png"))[: args.maps],
+        "dungeon": sorted((MAPS / "dungeon").glob("*.png"))[: args.maps],
+    }
+    ctx = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(args.workers, mp_context=ctx) as pool:
+        for name, paths in sets.items():
+            jobs = [(str(p), args.robots, s, e) for p in paths for s in range(args.seeds) for e in (False, True)]
+            steps = list(pool.map(episode, jobs))
+            base, exp = steps[0::2], steps[1::2]
+            est, lo, hi = paired_bootstrap(exp, base)
+            print(
+                f"{name}: {len(base)} episodes, hier-heuristic {np.mean(base):.1f} steps, expert {np.mean(exp):.1f}: "
+                f"{est:+.1f}% fewer [{lo:+.1f}, {hi:+.1f}], expert better in {sum(e < b for e, b in zip(exp, base))}"
+            )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
