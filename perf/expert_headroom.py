@@ -72,9 +72,10 @@ def main() -> int:
             steps = list(pool.map(episode, jobs))
             base, exp = steps[0::2], steps[1::2]
             est, lo, hi = paired_bootstrap(exp, base)
+            better = sum(e < b for e, b in zip(exp, base, strict=True))
             print(
                 f"{name}: {len(base)} episodes, hier-heuristic {np.mean(base):.1f} steps, expert {np.mean(exp):.1f}: "
-                f"{est:+.1f}% fewer [{lo:+.1f}, {hi:+.1f}], expert better in {sum(e < b for e, b in zip(exp, base))}"
+                f"{est:+.1f}% fewer [{lo:+.1f}, {hi:+.1f}], expert better in {better}"
             )
     return 0
 
