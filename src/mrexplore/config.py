@@ -304,10 +304,10 @@ class TrainConfig:
     """Step budget of a training episode, >= 1."""
     generated_share: float = 0.5
     """Share of training episodes on procedural floor plans (the rest on training DungeonMaps), in [0, 1]."""
-    val_maps: int = 16
+    val_maps: int = 32
     """Validation episodes per evaluation: half held-out training DungeonMaps, half held-out floor plans, >= 1."""
     # -- imitation of the lookahead expert
-    dagger_rounds: int = 4
+    dagger_rounds: int = 6
     """Rounds of (collect on the student's own states, fit), >= 0; round 0's student is the heuristic."""
     episodes_per_round: int = 12
     """Training episodes collected per DAgger round, >= 1."""
@@ -319,14 +319,20 @@ class TrainConfig:
     """Noisy utility assignments among the expert's candidates, >= 0."""
     noise_m: float = 4.0
     """Gumbel scale of the noise on the utility cost of noisy candidates, metres of detour, > 0."""
-    return_temperature: float = 5.0
+    return_temperature: float = 10.0
     """Target of the listwise loss: softmax(candidate return / this), > 0."""
-    imitation_epochs: int = 30
-    """Passes over the aggregated expert data per round, >= 1."""
+    imitation_epochs: int = 8
+    """Passes over the aggregated expert data per round, >= 1 (30 overfitted single-rollout labels: the
+    validation steps rose round after round)."""
     lr: float = 1e-3
     """Adam learning rate of imitation, > 0."""
+    weight_decay: float = 1e-4
+    """Adam weight decay, >= 0."""
+    residual_l2: float = 0.01
+    """Weight of the mean squared residual in the imitation loss: the network departs from the heuristic
+    only where the expert's data insist, >= 0."""
     # -- PPO on eq. 9
-    ppo_iterations: int = 4
+    ppo_iterations: int = 2
     """PPO iterations after imitation (0: none), >= 0."""
     ppo_episodes: int = 12
     """Episodes collected per PPO iteration, >= 1."""
@@ -374,7 +380,7 @@ class TrainConfig:
             _require(getattr(self, name) > 0, name, "> 0", getattr(self, name))
         _require(0 < self.gamma <= 1, "gamma", "in (0, 1]", self.gamma)
         _require(0 <= self.gae_lambda <= 1, "gae_lambda", "in [0, 1]", self.gae_lambda)
-        for name in ("value_coef", "entropy_coef", "imitation_coef"):
+        for name in ("value_coef", "entropy_coef", "imitation_coef", "weight_decay", "residual_l2"):
             _require(getattr(self, name) >= 0, name, ">= 0", getattr(self, name))
 
 

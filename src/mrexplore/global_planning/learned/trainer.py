@@ -52,7 +52,7 @@ from mrexplore.strategies import ExplorationPipeline, make_strategy
 from mrexplore.threads import THREADS_ENV
 from mrexplore.types import MrExploreError
 
-__all__ = ["train", "TrainResult", "split_maps", "LOG_COLUMNS"]
+__all__ = ["train", "validate_policy", "TrainResult", "split_maps", "LOG_COLUMNS"]
 
 LOG_COLUMNS = [
     "time_s", "stage", "episodes", "decisions", "labels", "loss", "expert_agreement", "expert_gain", "kl",
@@ -144,7 +144,7 @@ def _run_job(job: _Job) -> dict[str, Any]:
         while m.advance():
             m.decide()
             decisions += 1
-        return _episode_stats(m, decisions)
+        return {"map": job.map_spec, **_episode_stats(m, decisions)}
     if job.kind == "expert":
         return _run_expert(job, net)
     return _run_ppo(job, net)
@@ -311,14 +311,19 @@ def _label_batch(labels: Sequence[ExpertLabel]) -> tuple[Any, torch.Tensor, torc
 
 
 def _imitation_loss(
-    net: MultiGraphNet, labels: Sequence[ExpertLabel], temperature: float
+    net: MultiGraphNet, labels: Sequence[ExpertLabel], temperature: float, residual_l2: float = 0.0
 ) -> tuple[torch.Tensor, float]:
-    """Listwise loss of a minibatch and the share of decisions where the student ranks the expert's best
-    candidate (or one as good) first."""
+    """Listwise loss of a minibatch (plus ``residual_l2`` times the mean squared residual over the allowed
+    pairs) and the share of decisions where the student ranks the expert's best candidate (or one as good)
+    first."""
     batch, cands, rets, valid = _label_batch(labels)
     aff, _, _ = net(batch)
     scores = assignment_score(aff, cands)
     loss = listwise_loss(scores, rets, valid, temperature)
+    if residual_l2 > 0:
+        allowed = torch.isfinite(aff)
+        residual = torch.where(allowed, aff - batch.base, torch.zeros_like(aff))
+        loss = loss + residual_l2 * (residual**2).sum() / allowed.sum().clamp(min=1)
     with torch.no_grad():
         pick = torch.where(valid, scores, torch.full_like(scores, -1e9)).argmax(-1)
         best = torch.where(valid, rets, torch.full_like(rets, -1e9)).max(-1).values
@@ -338,7 +343,8 @@ def _fit_imitation(
     for _ in range(cfg.imitation_epochs):
         order = rng.permutation(len(data))
         for s in range(0, len(order), _BATCH):
-            loss, agree = _imitation_loss(net, [data[i] for i in order[s : s + _BATCH]], cfg.return_temperature)
+            batch = [data[i] for i in order[s : s + _BATCH]]
+            loss, agree = _imitation_loss(net, batch, cfg.return_temperature, cfg.residual_l2)
             opt.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0)
@@ -401,7 +407,7 @@ def _ppo_update(
             )
             if data and cfg.imitation_coef > 0:
                 pick = rng.choice(len(data), size=min(_BATCH, len(data)), replace=False)
-                im, _ = _imitation_loss(net, [data[i] for i in pick], cfg.return_temperature)
+                im, _ = _imitation_loss(net, [data[i] for i in pick], cfg.return_temperature, cfg.residual_l2)
                 loss = loss + cfg.imitation_coef * im
             opt.zero_grad()
             loss.backward()
@@ -545,7 +551,7 @@ def train(
     out.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(seed)
     net = MultiGraphNet(cfg.learned, VALUE_INPUTS)
-    opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
+    opt = torch.optim.Adam(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     st = _State()
     data: list[ExpertLabel] = []
     rng = np.random.default_rng(seed)
@@ -676,6 +682,24 @@ def train(
         w.writeheader()
         w.writerows(st.stage_rows)
     return TrainResult(out / "policy.pt", st.best_stage, st.stage_rows)
+
+
+def validate_policy(
+    policy: Path | None, cfg: TrainConfig, train_dir: Path | None, workers: int = 0
+) -> tuple[float, float, list[int]]:
+    """Mean validation steps and coverage (and the steps per validation map, in order) of a policy file
+    (None: the heuristic, hier-heuristic) on ``cfg``'s validation maps: to compare runs on one set."""
+    weights = None
+    if policy is not None:
+        from mrexplore.global_planning.learned.checkpoint import load_policy
+
+        weights = _weights(load_policy(policy).net)
+    _, val_maps = split_maps(train_dir, cfg.val_maps)
+    with _Runner(workers, None) as runner:
+        jobs = [_Job("eval", m, 3, i, weights, cfg) for i, m in enumerate(val_maps)]
+        res = {r["map"]: r for r in runner.run(jobs, math.inf)}  # they come as they finish
+    steps = [int(res[m]["steps"]) for m in val_maps]
+    return float(np.mean(steps)), float(np.mean([r["coverage"] for r in res.values()])), steps
 
 
 def _collect_row(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
