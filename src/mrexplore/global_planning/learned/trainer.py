@@ -95,6 +95,9 @@ class _Job:
     seed: int
     weights: bytes | None
     cfg: TrainConfig
+    index: int = 0
+    """Position in its batch: results are put back in this order, so a run does not depend on which
+    worker finished first."""
 
 
 def _weights(net: MultiGraphNet) -> bytes:
@@ -137,6 +140,10 @@ def _episode_stats(m: Mission, decisions: int) -> dict[str, float]:
 
 def _run_job(job: _Job) -> dict[str, Any]:
     """One episode in a worker; returns plain data (labels, a trajectory, or an evaluation)."""
+    return {"index": job.index, **_run_episode(job)}
+
+
+def _run_episode(job: _Job) -> dict[str, Any]:
     net = _net_from(job)
     if job.kind == "eval":
         m = _mission(job, _pipeline(LearnedPlanner(net) if job.weights is not None else None))
@@ -255,6 +262,10 @@ class _Runner:
             import ray
 
             ray.shutdown()
+
+    def results(self, jobs: Sequence[_Job], deadline: float) -> list[dict[str, Any]]:
+        """Results of the ``jobs`` that ran, in the jobs' order (jobs not started by ``deadline`` are dropped)."""
+        return sorted(self.run(jobs, deadline), key=lambda r: int(r["index"]))
 
     def run(self, jobs: Sequence[_Job], deadline: float) -> Iterator[dict[str, Any]]:
         """Results of ``jobs`` as they finish; jobs not started by ``deadline`` (perf_counter) are dropped."""
@@ -516,14 +527,14 @@ class _Log:
 def _episode_jobs(
     kind: str, n: int, maps: list[str], cfg: TrainConfig, rng: np.random.Generator, weights: bytes | None
 ) -> list[_Job]:
-    jobs = []
+    jobs: list[_Job] = []
     for _ in range(n):
         if not maps or rng.random() < cfg.generated_share:
             spec = f"generated:{int(rng.integers(0, _VAL_SEED0))}"
         else:
             spec = maps[int(rng.integers(len(maps)))]
         robots = int(rng.integers(cfg.robots_min, cfg.robots_max + 1))
-        jobs.append(_Job(kind, spec, robots, int(rng.integers(0, 2**31 - 1)), weights, cfg))
+        jobs.append(_Job(kind, spec, robots, int(rng.integers(0, 2**31 - 1)), weights, cfg, len(jobs)))
     return jobs
 
 
@@ -602,7 +613,7 @@ def train(
             elif stage.startswith("dagger"):
                 # collect: the student drives, the expert labels its decisions
                 jobs = _episode_jobs("expert", budget_left(cfg.episodes_per_round), train_maps, cfg, rng, _weights(net))
-                results = list(runner.run(jobs, deadline))
+                results = runner.results(jobs, deadline)
                 new = [lab for r in results for lab in r["labels"]]
                 data += new
                 st.episodes += len(results)
@@ -618,7 +629,7 @@ def train(
                     row["loss"], row["expert_agreement"] = _fit_imitation(net, opt, data, cfg, rng)
             else:
                 jobs = _episode_jobs("ppo", budget_left(cfg.ppo_episodes), train_maps, cfg, rng, _weights(net))
-                results = list(runner.run(jobs, deadline))
+                results = runner.results(jobs, deadline)
                 st.episodes += len(results)
                 row |= _collect_row(results) | {
                     "return_mean": float(np.mean([r["rewards"].sum() for r in results])) if results else None
