@@ -99,6 +99,12 @@ def paired_table(rows: list[Row], focus: str, strategies: Sequence[str], key: st
     with its bootstrap 95% interval, and the mean coverage difference in points, per dataset and size class
     (``key="size_class"``: per size class)."""
     groups = [f"{d} {c}" for d, c in _groups(rows)] if key == "dataset" else _classes(rows)
+    teams = sorted({int(r["robots"]) for r in rows})
+    if len(teams) > 1:  # one block per team size: pairs never mix them, and neither should the means
+        return "\n\n".join(
+            f"{n} robots:\n\n" + paired_table([r for r in rows if int(r["robots"]) == n], focus, strategies, key)
+            for n in teams
+        )
     others = [o for o in strategies if o != focus]
     lines = [
         "| group | " + " | ".join(f"vs {o}: fewer steps % [95% CI] | cov. diff pts | pairs" for o in others) + " |",
