@@ -16,6 +16,7 @@ from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs
 from mrexplore.global_planning.learned.network import MultiGraphNet, collate
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
+from mrexplore.threads import thread_count
 
 __all__ = [
     "LearnedPlanner",
@@ -148,6 +149,13 @@ class LearnedPlanner:
     record: list[PolicyStep] | None = None
     value_extra: NDArray[np.float32] | None = None
     """Privileged scalars for the critic at the next decision (set by the trainer; the actor never reads them)."""
+
+    def __post_init__(self) -> None:
+        # torch's intra-op threads follow the package's setting: benchmark workers run one mission per core
+        # (MREXPLORE_THREADS=1), and two workers with two threads each made a decision 9x slower (187 ms
+        # against 21) by oversubscribing the cores. The network's tensors are too small to gain from threads.
+        if torch.get_num_threads() > thread_count():
+            torch.set_num_threads(thread_count())
 
     def affinity(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64], float]:
         """E_rc ``(R, C) float64`` (``-inf`` where unreachable), with the inputs and the critic's value.
