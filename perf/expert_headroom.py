@@ -1,7 +1,7 @@
 """Headroom of the lookahead expert: whole episodes where it takes every decision, against hier-heuristic on
 the same maps, seeds and starts (paired), per dataset.
 
-Run: python perf/expert_headroom.py [--maps 6] [--robots 3] [--seeds 1] [--workers 2]
+Run: python perf/expert_headroom.py [--maps 6] [--robots 3] [--seeds 1] [--workers 2] [--datasets houseexpo,dungeon]
 It picks the first ``--maps`` maps by name of each dev dataset (HouseExpo PNGs, DungeonMaps) at 0.1 m. The
 expert may use the simulator (training only): at each decision it runs its candidates (the heuristic's,
 nearest's and noisy utility assignments) forward over the training horizon and takes the best return.
@@ -57,14 +57,16 @@ def main() -> int:
     ap.add_argument("--robots", type=int, default=3)
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--datasets", default="houseexpo,dungeon", help="comma-separated: houseexpo, dungeon")
     args = ap.parse_args()
     if not MAPS.is_dir():
         print(f"skipped: dev maps not found at {MAPS}", file=sys.stderr)
         return 0
-    sets = {
+    every = {
         "houseexpo": sorted((MAPS / "houseexpo" / "png").glob("*.png"))[: args.maps],
         "dungeon": sorted((MAPS / "dungeon").glob("*.png"))[: args.maps],
     }
+    sets = {name: every[name] for name in args.datasets.split(",") if name}
     ctx = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(args.workers, mp_context=ctx) as pool:
         for name, paths in sets.items():
