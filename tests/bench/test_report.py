@@ -66,6 +66,8 @@ def test_paired_bootstrap_by_hand() -> None:
     assert est == pytest.approx(10.0)  # (100 - 90) / 100
     assert 0.0 <= lo <= est <= hi <= 20.0  # resampling pairs of saved 20, 0 and 10 %
     assert paired_bootstrap([90.0, 90.0], [100.0, 100.0]) == (10.0, 10.0, 10.0)
+    est, lo, hi = paired_bootstrap([0.0, 90.0], [0.0, 100.0])  # resamples of the 0-step pair alone drop out
+    assert (est, lo, hi) == pytest.approx((10.0, 10.0, 10.0))  # every other resample saves 10 %
     with pytest.raises(ValueError, match="two equal, non-empty samples, got 2 and 1"):
         paired_bootstrap([1.0, 2.0], [1.0])
 

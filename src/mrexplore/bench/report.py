@@ -89,8 +89,10 @@ def paired_bootstrap(
         raise ValueError(f"paired_bootstrap needs two equal, non-empty samples, got {len(a)} and {len(b)}")
     est = 100.0 * (b.mean() - a.mean()) / b.mean()
     idx = np.random.default_rng(seed).integers(0, len(a), size=(resamples, len(a)))
-    boot = 100.0 * (b[idx].mean(1) - a[idx].mean(1)) / b[idx].mean(1)
-    lo, hi = np.percentile(boot, [2.5, 97.5])
+    denom = b[idx].mean(1)
+    # A resample of episodes that all ended at step 0 (a map seen whole by the first scan) has no %.
+    boot = 100.0 * (b[idx].mean(1) - a[idx].mean(1))[denom > 0] / denom[denom > 0]
+    lo, hi = np.percentile(boot, [2.5, 97.5]) if len(boot) else (np.nan, np.nan)
     return float(round(est, 6)), float(round(lo, 6)), float(round(hi, 6))
 
 
