@@ -335,8 +335,9 @@ class TrainConfig:
     only where the expert's data insist, >= 0."""
     # -- PPO on eq. 9
     ppo_iterations: int = 0
-    """PPO iterations after imitation, >= 0 (0 in the shipped recipe: in two runs every PPO iteration
-    raised the validation steps; its sampled policy explores far worse than the decoded one)."""
+    """PPO iterations after imitation, >= 0 (0 in the shipped recipe: in two runs no PPO iteration came
+    near the best imitation stage's validation steps; its sampled policy explores far worse than the
+    decoded one)."""
     ppo_episodes: int = 12
     """Episodes collected per PPO iteration, >= 1."""
     ppo_epochs: int = 4
