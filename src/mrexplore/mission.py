@@ -249,27 +249,39 @@ class Mission:
             for i in range(sim.n_robots)
         ]
 
-    def decide(self) -> Decision:
-        """Take the pending decision with the strategy's own planner and apply it."""
+    def _round(self) -> tuple[float, tuple[object, ...]]:
+        """The centre's round (robots send, the centre rebuilds): the start time and the arguments every
+        strategy decides on (grid, robot cells, resolution, blacklist, current routes, generator)."""
         t = time.perf_counter()
         self.state = self.link.exchange(self.sim.beliefs, self.sim.positions_rc)
-        decision = self.strategy.decide(
-            self.state, self.sim.positions_rc.copy(), self.truth.resolution_m, self.blacklist, self._current()
+        sim = self.sim
+        return t, (
+            self.state,
+            sim.positions_rc.copy(),
+            self.truth.resolution_m,
+            self.blacklist,
+            self._current(),
+            self.rng,
         )
-        # The centre's time: decoding, rebuilding and planning; the robots encode on board.
-        self.plan_ms.append((time.perf_counter() - t) * 1e3 - self.link.robot_ms)
+
+    def _centre_ms(self, t: float) -> float:
+        """The centre's time since ``t``: decoding, rebuilding and planning; the robots encode on board."""
+        return (time.perf_counter() - t) * 1e3 - self.link.robot_ms
+
+    def decide(self) -> Decision:
+        """Take the pending decision with the strategy's own planner and apply it."""
+        t, args = self._round()
+        decision = self.strategy.decide(*args)  # type: ignore[arg-type]
+        self.plan_ms.append(self._centre_ms(t))
         self._apply(decision)
         return decision
 
     def pose(self) -> AssignmentProblem | None:
         """First half of a decision: the centre's round and layer 1. Returns the problem a global planner
         answers with :meth:`commit`, or None when the mission ended here (no frontier left or reachable)."""
-        t = time.perf_counter()
-        self.state = self.link.exchange(self.sim.beliefs, self.sim.positions_rc)
-        posed = self.strategy.pose(
-            self.state, self.sim.positions_rc.copy(), self.truth.resolution_m, self.blacklist, self._current(), self.rng
-        )
-        ms = (time.perf_counter() - t) * 1e3 - self.link.robot_ms
+        t, args = self._round()
+        posed = self.strategy.pose(*args)  # type: ignore[arg-type]
+        ms = self._centre_ms(t)
         if posed.problem is None:
             self.plan_ms.append(ms)
             self._apply(posed.final)  # type: ignore[arg-type]

@@ -264,10 +264,12 @@ class ExplorationPipeline:
         resolution_m: float,
         blacklist: BoolGrid | None = None,
         current: Sequence[NDArray[np.int32]] | None = None,
+        rng: np.random.Generator | None = None,
     ) -> Decision:
         """Run layers 1-3 on the centre's grid and give every robot a goal, a route and a path
-        (:meth:`pose`, the global planner's answer, :meth:`finish`)."""
-        posed = self.pose(state, robots_rc, resolution_m, blacklist, current)
+        (:meth:`pose`, the global planner's answer, :meth:`finish`); ``rng`` reaches the planner in the
+        problem (a seeded generator for stochastic planners)."""
+        posed = self.pose(state, robots_rc, resolution_m, blacklist, current, rng)
         if posed.problem is None:
             return posed.final  # type: ignore[return-value]
         return self.finish(posed, self.planner.assign(posed.problem))
@@ -291,6 +293,7 @@ class CoScanPipeline(ExplorationPipeline):
         resolution_m: float,
         blacklist: BoolGrid | None = None,
         current: Sequence[NDArray[np.int32]] | None = None,
+        rng: np.random.Generator | None = None,
     ) -> Decision:
         frontiers = detect_frontiers(state)
         un = frontiers.un_mask.copy()
@@ -358,6 +361,7 @@ class OraclePipeline(ExplorationPipeline):
         resolution_m: float,
         blacklist: BoolGrid | None = None,
         current: Sequence[NDArray[np.int32]] | None = None,
+        rng: np.random.Generator | None = None,
     ) -> Decision:
         if self._plan is None or self._truth_state is None:
             raise MrExploreError("the oracle needs the ground truth: call prepare() before decide()")
