@@ -36,7 +36,7 @@ from mrexplore.global_planning.learned.expert import (
     lookahead_returns,
     privileged_scalars,
 )
-from mrexplore.global_planning.learned.features import GraphInputs
+from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs
 from mrexplore.global_planning.learned.network import MultiGraphNet, collate
 from mrexplore.global_planning.learned.policy import (
     LearnedPlanner,
@@ -177,7 +177,7 @@ def _run_expert(job: _Job, net: MultiGraphNet) -> dict[str, Any]:
                 returns = lookahead_returns(m, cands, cfg.horizon_steps, continuation)
                 gains.append(float(returns.max() - returns[0]))  # candidate 0 is the student's own
                 if np.ptp(returns) > 0:  # a decision where every candidate is as good teaches nothing
-                    g = student.affinity(problem)[0]
+                    g = graph_inputs(problem, net.cfg, student.heuristic)  # the inputs alone, no forward pass
                     labels.append(ExpertLabel(g, np.stack(cands), returns))
         m.commit(own)  # DAgger: the student's own action moves the episode on
         decisions += 1
