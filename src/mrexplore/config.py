@@ -7,7 +7,12 @@ with the parameter name, the value received and the allowed range, e.g.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+import functools
+import math
+import numbers
+import types
+import typing
+from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from typing import Any
 
 from mrexplore.types import MrExploreError
@@ -22,6 +27,7 @@ __all__ = [
     "GlobalPlanningConfig",
     "LocalPlanningConfig",
     "CoScanConfig",
+    "FaultConfig",
     "MissionConfig",
     "LearnedConfig",
     "TrainConfig",
@@ -35,8 +41,60 @@ def _require(ok: bool, name: str, rule: str, value: object) -> None:
         raise MrExploreError(f"{name} must be {rule}, got {value!r}")
 
 
+class _Checked:
+    """Base of every config: checks each field's type (numbers finite, bools not taken for numbers, nested
+    configs of their class) before the class's own range rules, so that a YAML file or a flag with the
+    wrong kind of value gets the same one-line error as one out of range."""
+
+    def __post_init__(self) -> None:
+        hints = _hints(type(self).__qualname__)
+        for f in fields(self):  # type: ignore[arg-type]
+            _check_type(f.name, getattr(self, f.name), hints[f.name])
+        self._validate()
+
+    def _validate(self) -> None:
+        """The class's range rules."""
+
+
+@functools.cache
+def _hints(class_name: str) -> dict[str, Any]:
+    return typing.get_type_hints(globals()[class_name])
+
+
+def _check_type(name: str, value: object, hint: Any) -> None:
+    if typing.get_origin(hint) in (types.UnionType, typing.Union):
+        options = [a for a in typing.get_args(hint) if a is not type(None)]
+        if value is None:
+            return
+        hint = options[0]
+        rule_none = " or None"
+    else:
+        rule_none = ""
+    if hint is float:
+        _require(_finite(value), name, f"a finite number{rule_none}", value)
+    elif hint is int:
+        _require(_integer(value), name, f"an integer{rule_none}", value)
+    elif hint is bool:
+        _require(isinstance(value, bool), name, "true or false", value)
+    elif hint is str:
+        _require(isinstance(value, str), name, f"a string{rule_none}", value)
+    elif isinstance(hint, type) and is_dataclass(hint):
+        _require(isinstance(value, hint), name, f"a {hint.__name__}", value)
+    # tuples: the class checks their items (and takes lists from YAML)
+
+
+def _finite(value: object) -> bool:
+    """A real number that is neither NaN nor infinite (bools are refused: ``True`` is no distance)."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _integer(value: object) -> bool:
+    """An integer, NumPy's included, but not a bool."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
 @dataclass(frozen=True)
-class MapConfig:
+class MapConfig(_Checked):
     """How a map file becomes a ground-truth grid."""
 
     resolution_m: float = 0.05
@@ -49,7 +107,7 @@ class MapConfig:
     """Free passages narrower than this are closed: no robot fits (HouseExpo renders leave 1-6 cm slivers
     where walls meet), metres, >= 0 (0: keep every gap)."""
 
-    def __post_init__(self) -> None:
+    def _validate(self) -> None:
         _require(self.resolution_m > 0, "resolution", "> 0 metres", self.resolution_m)
         _require(self.outside_opening_m > 0, "outside_opening_m", "> 0 metres", self.outside_opening_m)
         _require(self.min_passage_m >= 0, "min_passage_m", ">= 0 metres", self.min_passage_m)
@@ -58,7 +116,7 @@ class MapConfig:
 
 
 @dataclass(frozen=True)
-class SensorConfig:
+class SensorConfig(_Checked):
     """360° 2D LiDAR and the log-odds belief it updates (paper eq. 1)."""
 
     range_m: float = 6.0
@@ -78,7 +136,7 @@ class SensorConfig:
     range_noise_m: float = 0.0
     """Standard deviation of Gaussian range noise, metres, >= 0 (0: noiseless)."""
 
-    def __post_init__(self) -> None:
+    def _validate(self) -> None:
         _require(self.range_m > 0, "range_m", "> 0 metres", self.range_m)
         _require(self.ray_oversampling >= 1, "ray_oversampling", ">= 1", self.ray_oversampling)
         _require(0.5 < self.p_hit < 1, "p_hit", "in (0.5, 1)", self.p_hit)
@@ -90,18 +148,18 @@ class SensorConfig:
 
 
 @dataclass(frozen=True)
-class MotionConfig:
+class MotionConfig(_Checked):
     """How far a robot drives per simulation step."""
 
     step_m: float = 0.1
     """Distance driven per step along the path, metres, > 0 (the mission's clock)."""
 
-    def __post_init__(self) -> None:
+    def _validate(self) -> None:
         _require(self.step_m > 0, "step_m", "> 0 metres", self.step_m)
 
 
 @dataclass(frozen=True)
-class RewardConfig:
+class RewardConfig(_Checked):
     """Team reward of paper eq. 9: R = R_time + lambda * R_area."""
 
     time_reward: float = -1.0
@@ -109,13 +167,13 @@ class RewardConfig:
     area_weight: float = 2.0
     """lambda, weight of newly known explorable area in m^2, >= 0 (paper: 2)."""
 
-    def __post_init__(self) -> None:
+    def _validate(self) -> None:
         _require(self.time_reward <= 0, "time_reward", "<= 0", self.time_reward)
         _require(self.area_weight >= 0, "area_weight", ">= 0", self.area_weight)
 
 
 @dataclass(frozen=True)
-class SimConfig:
+class SimConfig(_Checked):
     """The multi-robot simulator."""
 
     robots: int = 3
@@ -126,13 +184,13 @@ class SimConfig:
     motion: MotionConfig = field(default_factory=MotionConfig)
     reward: RewardConfig = field(default_factory=RewardConfig)
 
-    def __post_init__(self) -> None:
-        _require(isinstance(self.robots, int) and self.robots >= 1, "robots", ">= 1", self.robots)
+    def _validate(self) -> None:
+        _require(self.robots >= 1, "robots", ">= 1", self.robots)
         _require(self.start_spread_m >= 0, "start_spread_m", ">= 0 metres", self.start_spread_m)
 
 
 @dataclass(frozen=True)
-class PreprocessConfig:
+class PreprocessConfig(_Checked):
     """Layer 1: closing, frontier detection and Mean-Shift clustering (paper IV-A)."""
 
     closing_size_cells: int = 3
@@ -144,7 +202,7 @@ class PreprocessConfig:
     bandwidth_sample: int = 1000
     """At most this many frontier cells (an even stride over them) enter the percentile, >= 2."""
 
-    def __post_init__(self) -> None:
+    def _validate(self) -> None:
         _require(
             self.closing_size_cells >= 1 and self.closing_size_cells % 2 == 1,
             "closing_size_cells",
@@ -157,7 +215,7 @@ class PreprocessConfig:
 
 
 @dataclass(frozen=True)
-class GlobalPlanningConfig:
+class GlobalPlanningConfig(_Checked):
     """Layer 2: weights of the classical assigners."""
 
     distance_weight: float = 3.0
@@ -170,7 +228,7 @@ class GlobalPlanningConfig:
     in [0, 1]; 1: none (every decision starts afresh); None: the strategy's default (0.5 for strategies
     that go to cluster centres, 1 for hier, whose routes already commit)."""
 
-    def __post_init__(self) -> None:
+    def _validate(self) -> None:
         _require(self.distance_weight >= 0, "distance_weight", ">= 0", self.distance_weight)
         _require(self.size_weight >= 0, "size_weight", ">= 0", self.size_weight)
         if self.commitment is not None:
@@ -178,7 +236,7 @@ class GlobalPlanningConfig:
 
 
 @dataclass(frozen=True)
-class CoScanConfig:
+class CoScanConfig(_Checked):
     """The CoScan-2D baseline (Dong et al. 2019): task sampling and geodesic Lloyd clustering."""
 
     task_spacing_m: float = 0.5
@@ -190,7 +248,7 @@ class CoScanConfig:
     max_iterations: int = 10
     """Lloyd iterations at most, >= 1."""
 
-    def __post_init__(self) -> None:
+    def _validate(self) -> None:
         _require(self.task_spacing_m > 0, "task_spacing_m", "> 0 metres", self.task_spacing_m)
         _require(self.tasks_per_robot >= 1, "tasks_per_robot", ">= 1", self.tasks_per_robot)
         _require(self.delta_m > 0, "delta_m", "> 0 metres", self.delta_m)
@@ -198,7 +256,7 @@ class CoScanConfig:
 
 
 @dataclass(frozen=True)
-class LocalPlanningConfig:
+class LocalPlanningConfig(_Checked):
     """Layer 3: routing inside the assigned cluster (paper IV-C, eqs. 10-11)."""
 
     theta_members: int = 40
@@ -223,7 +281,7 @@ class LocalPlanningConfig:
     margin_m: float = 2.0
     """Distances between candidates are computed on the box around robot and cluster grown by this, m, >= 0."""
 
-    def __post_init__(self) -> None:
+    def _validate(self) -> None:
         _require(self.theta_members >= 1, "theta_members", ">= 1", self.theta_members)
         for name in ("k_g", "k_l", "upper_gain", "upper_cost", "epsilon"):
             _require(getattr(self, name) > 0, name, "> 0", getattr(self, name))
@@ -235,7 +293,63 @@ class LocalPlanningConfig:
 
 
 @dataclass(frozen=True)
-class MissionConfig:
+class FaultConfig(_Checked):
+    """Faults injected into a mission: lost robots, lost messages, a restarting centre, limited radio range."""
+
+    robot_failures: tuple[tuple[int, int], ...] = ()
+    """``(robot, step)`` pairs: at that simulation step the robot stops driving, scanning and sending for
+    good; robot ids count from 0, steps >= 0. A robot id beyond the team is refused by the mission."""
+    message_loss: float = 0.0
+    """Probability that one robot-to-centre message, or one centre-to-robot acknowledgement, is lost
+    (independent draws from the mission's seed), in [0, 1)."""
+    centre_restarts: tuple[int, ...] = ()
+    """Simulation steps at which the centre loses all its state (robot maps, what it acknowledged, its
+    blacklist); it rebuilds from the next messages, steps >= 0."""
+    comm_range_m: float | None = None
+    """A robot farther than this straight-line distance from the relay (the first robot's start) cannot
+    send; it keeps exploring on its own grid and syncs when back in range, metres, > 0; None: unlimited."""
+    silence_rounds: int = 3
+    """The centre stops assigning goals to a robot it has not heard from in this many rounds, >= 1."""
+
+    def _validate(self) -> None:
+        # YAML gives lists; the frozen config keeps tuples (hashable, and equal to the flags' value).
+        given = self.robot_failures
+        try:
+            failures = tuple(tuple(f) for f in given)
+        except TypeError:
+            failures = ((-1,),)  # refused below with the value received
+        _require(
+            isinstance(self.centre_restarts, list | tuple), "centre_restarts", "a list of steps", self.centre_restarts
+        )
+        object.__setattr__(self, "robot_failures", failures)
+        object.__setattr__(self, "centre_restarts", tuple(self.centre_restarts))
+        for f in failures:
+            _require(
+                len(f) == 2 and all(_integer(v) and v >= 0 for v in f),
+                "robot_failures",
+                "(robot >= 0, step >= 0) integer pairs",
+                given,
+            )
+        _require(len({r for r, _ in failures}) == len(failures), "robot_failures", "one entry per robot", failures)
+        _require(
+            all(_integer(s) and s >= 0 for s in self.centre_restarts),
+            "centre_restarts",
+            "integer steps >= 0",
+            self.centre_restarts,
+        )
+        _require(0 <= self.message_loss < 1, "message_loss", "in [0, 1)", self.message_loss)
+        if self.comm_range_m is not None:
+            _require(self.comm_range_m > 0, "comm_range_m", "> 0 metres", self.comm_range_m)
+        _require(self.silence_rounds >= 1, "silence_rounds", ">= 1", self.silence_rounds)
+
+    @property
+    def any(self) -> bool:
+        """Whether any fault is configured."""
+        return bool(self.robot_failures or self.message_loss or self.centre_restarts or self.comm_range_m)
+
+
+@dataclass(frozen=True)
+class MissionConfig(_Checked):
     """One exploration mission: replanning events and the step budget."""
 
     max_steps: int = 20000
@@ -251,7 +365,9 @@ class MissionConfig:
     """What the centre rebuilds its grid from: ``delta`` (changes since the last acknowledged sparse
     frontier map) or ``full`` (the whole sparse map every round, the paper's). Same grid, fewer bytes."""
 
-    def __post_init__(self) -> None:
+    faults: FaultConfig = field(default_factory=FaultConfig)
+
+    def _validate(self) -> None:
         _require(self.max_steps >= 1, "max-steps", ">= 1", self.max_steps)
         _require(self.replan_every_steps >= 1, "replan_every_steps", ">= 1", self.replan_every_steps)
         _require(self.min_replan_steps >= 1, "min_replan_steps", ">= 1", self.min_replan_steps)
@@ -259,7 +375,7 @@ class MissionConfig:
 
 
 @dataclass(frozen=True)
-class LearnedConfig:
+class LearnedConfig(_Checked):
     """Layer 2, learned: the multi-graph network's inputs and size (paper IV-B, eqs. 4-8)."""
 
     hidden: int = 32
@@ -281,7 +397,7 @@ class LearnedConfig:
     """Edge feature: distance from cluster k to its nearest other cluster centre (straight line: a
     geodesic per centre costs more than the rest of a decision on large maps)."""
 
-    def __post_init__(self) -> None:
+    def _validate(self) -> None:
         _require(self.hidden >= 4, "hidden", ">= 4", self.hidden)
         _require(self.blocks >= 1, "blocks", ">= 1", self.blocks)
         _require(self.distance_scale_m > 0, "distance_scale_m", "> 0 metres", self.distance_scale_m)
@@ -290,7 +406,7 @@ class LearnedConfig:
 
 
 @dataclass(frozen=True)
-class TrainConfig:
+class TrainConfig(_Checked):
     """Training of the learned global layer: imitation of a lookahead expert (DAgger), then PPO on eq. 9."""
 
     learned: LearnedConfig = field(default_factory=LearnedConfig)
@@ -360,7 +476,7 @@ class TrainConfig:
     """Weight of the listwise expert loss kept during PPO on the aggregated data (keeps the policy near
     the expert while RL fine-tunes), >= 0."""
 
-    def __post_init__(self) -> None:
+    def _validate(self) -> None:
         _require(self.resolution_m > 0, "resolution_m", "> 0 metres", self.resolution_m)
         _require(self.robots_min >= 1, "robots_min", ">= 1", self.robots_min)
         _require(

@@ -11,8 +11,9 @@ from conftest import state_grid
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mrexplore.preprocessing.sparse_codec import HEADER, MAX_CELLS, CodecError, decode, encode
+from mrexplore.preprocessing.sparse_codec import HEADER, MAX_CELLS, MAX_ROUND, CodecError, decode, encode
 from mrexplore.preprocessing.sparse_map import FULL, SparseFrontierMap, sparse_frontier_map
+from mrexplore.types import MrExploreError
 
 ROOM = """
     #######
@@ -40,7 +41,7 @@ def messages(draw: st.DrawFn) -> SparseFrontierMap:
     if not is_delta:
         codes[codes == 0] = 1
     seeds = np.array(sorted(draw(st.sets(st.integers(0, n - 1), max_size=5))), dtype=np.int64)
-    rnd = draw(st.integers(1, 2**32 - 1))
+    rnd = draw(st.integers(1, MAX_ROUND))
     base = draw(st.integers(0, rnd - 1)) if is_delta else FULL
     pos = (draw(st.integers(0, h - 1)), draw(st.integers(0, w - 1)))
     return SparseFrontierMap(draw(st.integers(0, 65535)), rnd, (h, w), pos, cells, codes, seeds, base)
@@ -50,6 +51,16 @@ def messages(draw: st.DrawFn) -> SparseFrontierMap:
 @given(messages())
 def test_roundtrip_random_messages(message: SparseFrontierMap) -> None:
     assert decode(encode(message)) == message
+
+
+def test_encode_refuses_a_round_beyond_the_format() -> None:
+    message = sparse_frontier_map(state_grid(ROOM), robot=0, round_=MAX_ROUND + 1, position_rc=(2, 3))
+    with pytest.raises(MrExploreError) as err:
+        encode(message)
+    assert str(err.value) == (
+        f"cannot encode robot 0 at round {MAX_ROUND + 1}: the wire format holds robots 0..65535 and rounds "
+        f"0..{MAX_ROUND}; restart the round count"
+    )
 
 
 def test_roundtrip_hand_drawn_map_and_sizes() -> None:

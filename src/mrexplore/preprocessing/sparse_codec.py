@@ -38,7 +38,7 @@ import numpy as np
 from mrexplore.preprocessing.sparse_map import FULL, SparseFrontierMap
 from mrexplore.types import MrExploreError
 
-__all__ = ["encode", "decode", "CodecError", "HEADER", "VERSION", "MAX_CELLS"]
+__all__ = ["encode", "decode", "CodecError", "HEADER", "VERSION", "MAX_CELLS", "MAX_ROUND", "MAX_ROBOT"]
 
 MAGIC = b"MRXF"
 VERSION = 1
@@ -46,6 +46,10 @@ HEADER = struct.Struct("<4sBBBxHIiIIIIIIIII")
 """The fixed header; ``HEADER.size`` bytes."""
 MAX_CELLS = 1 << 28
 """Largest grid (cells) a message may refer to: 268 M cells, 26 km² at 0.1 m."""
+MAX_ROUND = (1 << 31) - 1
+"""Largest round number: a delta's base round is a signed 32-bit field (-1 marks a full map)."""
+MAX_ROBOT = (1 << 16) - 1
+"""Largest robot id (16 bits)."""
 _KIND_FULL, _KIND_DELTA = 0, 1
 _FLAG_DEFLATE = 1
 _DEFLATE_MAX_RATIO = 1100
@@ -181,6 +185,16 @@ def encode(message: SparseFrontierMap) -> bytes:
     >>> len(data), decode(data).round  # 54-byte header, 8 bytes of runs, 8 codes, 1 seed
     (71, 7)
     """
+    H, W = message.shape
+    if not 0 <= message.robot <= MAX_ROBOT or not 0 <= message.round <= MAX_ROUND:
+        raise MrExploreError(
+            f"cannot encode robot {message.robot} at round {message.round}: the wire format holds robots "
+            f"0..{MAX_ROBOT} and rounds 0..{MAX_ROUND}; restart the round count"
+        )
+    if not (H >= 1 and W >= 1 and H * W <= MAX_CELLS):
+        raise MrExploreError(
+            f"cannot encode a {H}x{W} grid: the wire format holds 1..{MAX_CELLS} cells; use a coarser grid"
+        )
     raw = _encode_payload(
         np.ascontiguousarray(message.cells, dtype=np.int64),
         np.ascontiguousarray(message.codes, dtype=np.uint8),
@@ -189,7 +203,6 @@ def encode(message: SparseFrontierMap) -> bytes:
     packed = zlib.compress(raw, 6)
     flags, payload = (_FLAG_DEFLATE, packed) if len(packed) < len(raw) else (0, raw)
     kind = _KIND_DELTA if message.is_delta else _KIND_FULL
-    H, W = message.shape
     fields = (
         MAGIC,
         VERSION,
