@@ -56,7 +56,7 @@ def main() -> int:
     sizes: list[int] = []
     on_fence: list[bool] = []
 
-    def observe(sim, decision, goals) -> None:
+    def observe(sim, decision, goals, status) -> None:
         if sim.steps % args.every:
             return
         size = strategy.preprocess.closing_size_cells

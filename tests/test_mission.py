@@ -46,7 +46,7 @@ def test_budget_ends_as_max_steps_never_success(small_map) -> None:
 def test_hier_routes_through_sub_clusters(small_map) -> None:
     seen: list[int] = []
 
-    def observe(sim, decision, goals) -> None:
+    def observe(sim, decision, goals, status) -> None:
         if decision is not None:
             seen.append(max(len(r) for r in decision.routes))
 
@@ -136,7 +136,7 @@ def test_vanished_goals_wait_min_replan_steps(small_map, k: int) -> None:
     last: list[object] = [None]
     idle = [False]
 
-    def observe(sim, decision, goals) -> None:
+    def observe(sim, decision, goals, status) -> None:
         if decision is not last[0]:
             decisions.append((sim.steps, idle[0]))
             last[0] = decision

@@ -6,7 +6,16 @@ and ``min_replan_steps`` passed since the last decision, and at least every ``re
 steps. A robot with a local route (paper IV-C) first moves on to the next target of its route that is
 still a frontier; only when none is left does its goal count as reached. The mission ends as the
 paper's: no cluster of the minimum size left, or none reachable; or when the step budget runs out
-(``max_steps``, never success).
+(``max_steps``, never success), or when every robot has failed (``robots_lost``).
+
+Faults (:class:`~mrexplore.config.FaultConfig`) act here: a failed robot stops for good and sends
+nothing; the centre assigns only to robots it heard from within ``silence_rounds`` rounds, at the cell
+of their last message that arrived, and a robot whose assigned path starts elsewhere plans its own way
+there; a restarting centre drops its maps and blacklist. A robot out of radio range neither sends nor
+receives: it finishes its route, then explores on its own grid (nearest frontier) and, with none
+left there, drives back into range to sync. Assignments
+reach every robot in range (they are a few bytes, resent until acknowledged); the loss of map
+messages and of their acknowledgements is simulated by the link (:class:`TeamLink`).
 """
 
 from __future__ import annotations
@@ -15,17 +24,20 @@ import copy
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
 from mrexplore.config import MissionConfig, SimConfig
-from mrexplore.global_planning.protocol import Assignment, AssignmentProblem
+from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.paths.astar import astar_path
-from mrexplore.preprocessing.transmission import TeamLink
+from mrexplore.paths.distance_field import descend_path, distance_fields, distances_at
+from mrexplore.preprocessing.frontiers import close_unknown_holes, detect_frontiers
+from mrexplore.preprocessing.transmission import LinkStatus, TeamLink
+from mrexplore.sim.belief import classify
 from mrexplore.sim.measures import EpisodeMeasures, lower_bound_steps
 from mrexplore.sim.starts import draw_starts
 from mrexplore.sim.world import ExplorationSim, StepResult
@@ -34,8 +46,9 @@ from mrexplore.types import CellState, MrExploreError
 
 __all__ = ["Mission", "MissionResult", "MissionSnapshot", "run_mission", "Observer"]
 
-Observer = Callable[[ExplorationSim, Decision | None, NDArray[np.int32]], None]
-"""Called after the first scan and after every step with the sim, the latest decision and the goals."""
+Observer = Callable[[ExplorationSim, Decision | None, NDArray[np.int32], LinkStatus], None]
+"""Called after the first scan and after every step with the sim, the latest decision, the goals and
+what the centre knows of each robot."""
 
 
 @dataclass
@@ -117,6 +130,13 @@ class Mission:
         starts: NDArray[np.int32] = np.asarray(starts_rc, dtype=np.int32)
         if len(starts) != sim_cfg.robots:
             raise MrExploreError(f"starts must give one cell per robot ({sim_cfg.robots}), got {len(starts)}")
+        faults = mission_cfg.faults
+        for robot, _ in faults.robot_failures:
+            if robot >= sim_cfg.robots:
+                raise MrExploreError(
+                    f"robot failure names robot {robot}, but the team has robots 0..{sim_cfg.robots - 1}; "
+                    "pass an id of the team"
+                )
         self.starts_rc = starts
         self._t0 = time.perf_counter()
         strategy.prepare(truth, starts, sim_cfg)
@@ -129,7 +149,23 @@ class Mission:
         self.last_decision_step = -mission_cfg.replan_every_steps
         self.decision: Decision | None = None
         # Every strategy plans on the grid the centre rebuilds from the robots' sparse frontier maps (IV-A).
-        self.link = TeamLink(n, truth.shape, strategy.preprocess, sim_cfg.sensor, mission_cfg.transmission)  # type: ignore[arg-type]
+        # Lost messages draw from a generator of their own, so that a run without faults is the same run.
+        self.link = TeamLink(
+            n,
+            truth.shape,
+            strategy.preprocess,
+            sim_cfg.sensor,
+            mission_cfg.transmission,  # type: ignore[arg-type]
+            faults.message_loss,
+            np.random.default_rng([seed, _LINK_STREAM]),
+            faults.silence_rounds,
+        )
+        self._restarts = sorted(faults.centre_restarts)
+        self._failures = sorted((step, robot) for robot, step in faults.robot_failures)
+        self._relay_rc = starts[0].copy()
+        self._range_cells = None if faults.comm_range_m is None else faults.comm_range_m / truth.resolution_m
+        self._active = np.arange(n)
+        """Robots of the pending decision (those the centre assigns to), in robot order."""
         self.state = np.full(truth.shape, CellState.UNKNOWN, dtype=np.uint8)  # until the first round
         self.done_reason: str | None = None
         show = sys.stderr.isatty() if progress is None else progress
@@ -143,7 +179,7 @@ class Mission:
         self._just_decided = False
         self._posed: tuple[PosedDecision, float] | None = None
         if observer:
-            observer(sim, None, self.goals)
+            observer(sim, None, self.goals, self.link.status)
 
     # -- state -----------------------------------------------------------------------------------------
     @property
@@ -187,7 +223,14 @@ class Mission:
         sim, goals, cfg = self.sim, self.goals, self.mission_cfg
         frontier_goals = self.strategy.goals_are_frontiers
         need = sim.steps - self.last_decision_step >= cfg.replan_every_steps
+        in_range = self._in_range()
         for i in range(sim.n_robots):
+            if not sim.alive[i]:
+                continue  # a failed robot asks for nothing
+            if not in_range[i]:
+                if self.blocked[i] or sim.path_ahead_blocked(i) or (sim.at_path_end(i) and not self._advance_route(i)):
+                    self._explore_alone(i)  # out of range: nobody to ask
+                continue
             if goals[i, 0] < 0:
                 continue
             reached = sim.at_path_end(i)
@@ -211,8 +254,49 @@ class Mission:
                 need |= not self._advance_route(i)
         return need
 
+    def _in_range(self) -> NDArray[np.bool_]:
+        """``(n_robots,) bool`` robots within radio range of the relay (all without a range limit)."""
+        if self._range_cells is None:
+            return np.ones(self.sim.n_robots, dtype=bool)
+        d = np.hypot(*(self.sim.positions_rc - self._relay_rc).T)
+        return np.asarray(d <= self._range_cells)
+
+    def _explore_alone(self, i: int) -> None:
+        """Robot i, out of range with its route done, picks the nearest frontier of its own grid; with
+        none left it drives back towards the relay until it is in range again, to sync."""
+        sim = self.sim
+        belief, here = sim.beliefs[i], sim.positions_rc[i]
+        if self.strategy.goals_are_frontiers and _goal_still_frontier(sim.team_observed, here):
+            self.blacklist[here[0], here[1]] = True  # stood on its goal and it stayed a frontier
+        window = belief.window(1)
+        origin = np.array([window[0].start, window[1].start], dtype=np.int32)
+        own = classify(belief.log_odds[window], belief.observed[window], self.sim_cfg.sensor)
+        own = close_unknown_holes(own, self.strategy.preprocess.closing_size_cells)
+        passable = own == CellState.FREE
+        passable[here[0] - origin[0], here[1] - origin[1]] = True
+        field = distance_fields(passable, (here - origin)[None])[0]
+        targets = detect_frontiers(own).un_rc
+        if len(targets):
+            targets = targets[~self.blacklist[targets[:, 0] + origin[0], targets[:, 1] + origin[1]]]
+        d = distances_at(field, targets) if len(targets) else np.zeros(0)
+        if len(d) and np.isfinite(d.min()):
+            goal = targets[int(np.argmin(d))]
+            path = descend_path(field, passable, (int(goal[0]), int(goal[1]))) + origin
+        else:
+            whole = np.zeros(self.truth.shape, dtype=bool)
+            whole[window] = passable
+            path = astar_path(whole | self.passable, (int(here[0]), int(here[1])), tuple(self._relay_rc))
+            near = np.hypot(*(path - self._relay_rc).T) <= self._range_cells if len(path) else np.zeros(0, bool)
+            if near.any():
+                path = path[: int(np.argmax(near)) + 1]  # back in range is enough
+        self.goals[i] = path[-1] if len(path) else NO_GOAL
+        self.routes[i] = _NO_ROUTE
+        sim.set_path(i, path)
+
     def step(self) -> StepResult:
-        """One simulation step (no replanning check): drive, scan, record."""
+        """One simulation step (no replanning check): fail robots due to fail, drive, scan, record."""
+        while self._failures and self._failures[0][0] <= self.sim.steps:
+            self.sim.fail(self._failures.pop(0)[1])
         result = self.sim.step()
         self.blocked = result.blocked
         self.curve.append(self.sim.coverage)
@@ -221,7 +305,7 @@ class Mission:
         self.reward_since_decision += r.time_reward + r.area_weight * new_m2
         self._bar.update(round(100 * self.sim.coverage) - self._bar.n)
         if self.observer:
-            self.observer(self.sim, self.decision, self.goals)
+            self.observer(self.sim, self.decision, self.goals, self.link.status)
         return result
 
     def advance(self) -> bool:
@@ -233,6 +317,9 @@ class Mission:
                 return True
             if self.sim.steps >= self.mission_cfg.max_steps:
                 self.done_reason = "max_steps"
+                break
+            if not self.sim.alive.any():
+                self.done_reason = "robots_lost"
                 break
             self.step()
         return False
@@ -251,16 +338,23 @@ class Mission:
 
     def _round(self) -> tuple[float, tuple[object, ...]]:
         """The centre's round (robots send, the centre rebuilds): the start time and the arguments every
-        strategy decides on (grid, robot cells, resolution, blacklist, current routes, generator)."""
+        strategy decides on (grid, cells of the robots it assigns to, resolution, blacklist, their current
+        routes, generator)."""
         t = time.perf_counter()
-        self.state = self.link.exchange(self.sim.beliefs, self.sim.positions_rc)
-        sim = self.sim
+        sim, link = self.sim, self.link
+        while self._restarts and self._restarts[0] <= sim.steps:
+            self._restarts.pop(0)
+            link.restart_centre()
+            self.blacklist = np.zeros(self.truth.shape, dtype=bool)  # the centre's memory too
+        self.state = link.exchange(sim.beliefs, sim.positions_rc, sim.alive & self._in_range())
+        self._active = np.flatnonzero(link.status.assignable)
+        current = self._current()
         return t, (
             self.state,
-            sim.positions_rc.copy(),
+            link.status.positions_rc[self._active],
             self.truth.resolution_m,
             self.blacklist,
-            self._current(),
+            [current[i] for i in self._active],
             self.rng,
         )
 
@@ -271,7 +365,11 @@ class Mission:
     def decide(self) -> Decision:
         """Take the pending decision with the strategy's own planner and apply it."""
         t, args = self._round()
-        decision = self.strategy.decide(*args)  # type: ignore[arg-type]
+        if len(self._active) == 0:  # the centre heard nobody in time: robots carry on with what they have
+            self.plan_ms.append(self._centre_ms(t))
+            self._idle_round()
+            return self.decision  # type: ignore[return-value]
+        decision = self._expand(self.strategy.decide(*args))  # type: ignore[arg-type]
         self.plan_ms.append(self._centre_ms(t))
         self._apply(decision)
         return decision
@@ -280,11 +378,15 @@ class Mission:
         """First half of a decision: the centre's round and layer 1. Returns the problem a global planner
         answers with :meth:`commit`, or None when the mission ended here (no frontier left or reachable)."""
         t, args = self._round()
+        if len(self._active) == 0:
+            self.plan_ms.append(self._centre_ms(t))
+            self._idle_round()
+            return None
         posed = self.strategy.pose(*args)  # type: ignore[arg-type]
         ms = self._centre_ms(t)
         if posed.problem is None:
             self.plan_ms.append(ms)
-            self._apply(posed.final)  # type: ignore[arg-type]
+            self._apply(self._expand(posed.final))  # type: ignore[arg-type]
             return None
         self._posed = (posed, ms)
         return posed.problem
@@ -298,10 +400,37 @@ class Mission:
         t = time.perf_counter()
         problem = posed.problem
         assert problem is not None
-        decision = self.strategy.finish(posed, assignment or self.strategy.planner.assign(problem))
+        decision = self._expand(self.strategy.finish(posed, assignment or self.strategy.planner.assign(problem)))
         self.plan_ms.append(ms + (time.perf_counter() - t) * 1e3)
         self._apply(decision)
         return decision
+
+    def _expand(self, decision: Decision) -> Decision:
+        """A decision over the robots the centre assigned to, spread over the whole team (the others get
+        nothing: they keep what they have, see :meth:`_apply`)."""
+        n, active = self.sim.n_robots, self._active
+        if len(active) == n:
+            return decision
+        goals = np.tile(NO_GOAL, (n, 1))
+        goals[active] = decision.goals_rc
+        cluster_of_robot = np.full(n, UNASSIGNED, dtype=np.int64)
+        cluster_of_robot[active] = decision.assignment.cluster_of_robot
+        routes, paths = [_NO_ROUTE] * n, [_NO_ROUTE] * n
+        for j, i in enumerate(active):
+            routes[i], paths[i] = decision.routes[j], decision.paths[j]
+        return replace(
+            decision,
+            goals_rc=goals,
+            routes=routes,
+            paths=paths,
+            assignment=replace(decision.assignment, cluster_of_robot=cluster_of_robot),
+        )
+
+    def _idle_round(self) -> None:
+        """A round in which the centre could assign to nobody: no decision; the robots drive on."""
+        self.last_decision_step = self.sim.steps
+        self.reward_since_decision = 0.0
+        self._just_decided = True
 
     def _apply(self, decision: Decision) -> None:
         self.last_decision_step = self.sim.steps
@@ -310,13 +439,20 @@ class Mission:
         if decision.done_reason is not None:
             self.done_reason = decision.done_reason
             return
-        self.goals = decision.goals_rc.copy()
         self.passable = decision.state == CellState.FREE
-        for i in range(self.sim.n_robots):
-            self.sim.set_path(i, decision.paths[i])
+        reached = self.sim.alive & self._in_range()
+        for i in map(int, self._active):
+            if not reached[i]:
+                continue  # failed, or out of range: the assignment never arrives
+            path = decision.paths[i]
+            goal = decision.goals_rc[i]
+            if len(path) and not np.array_equal(path[0], self.sim.positions_rc[i]):
+                # Planned from the cell of the robot's last message that arrived; it is elsewhere now.
+                here = _cell_mask(self.passable.shape, self.sim.positions_rc[i])
+                path = astar_path(self.passable | here, tuple(self.sim.positions_rc[i]), tuple(goal))
+            self.sim.set_path(i, path)
             self.routes[i] = decision.routes[i][1:]
-            if len(decision.paths[i]) == 0:
-                self.goals[i] = NO_GOAL
+            self.goals[i] = goal if len(path) else NO_GOAL
         self._just_decided = True
 
     def run(self) -> MissionResult:
@@ -338,11 +474,21 @@ class Mission:
             self.done_reason or "max_steps",
             self.link.totals.as_measures(),
             lower_bound_steps(~truth.occupied, sim.explorable, self.starts_rc, truth.resolution_m, self.sim_cfg),
+            int((~sim.alive).sum()),
         )
         return MissionResult(measures, np.asarray(self.curve), self.starts_rc.copy(), self.state, sim)
 
 
 _NO_ROUTE = np.zeros((0, 2), dtype=np.int32)
+_LINK_STREAM = 0x4C494E4B
+"""Second word of the seed of the link's generator (lost messages), apart from the mission's."""
+
+
+def _cell_mask(shape: tuple[int, int], rc: NDArray[np.integer]) -> NDArray[np.bool_]:
+    """``(H, W) bool`` with only ``rc`` set: a robot may always leave the cell it stands on."""
+    mask = np.zeros(shape, dtype=bool)
+    mask[int(rc[0]), int(rc[1])] = True
+    return mask
 
 
 def run_mission(

@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 from PIL import Image, ImageDraw
 
 from mrexplore.preprocessing.clustering import Clusters
+from mrexplore.preprocessing.transmission import LinkStatus
 from mrexplore.sim.belief import merge_beliefs
 from mrexplore.sim.world import ExplorationSim
 from mrexplore.strategies import Decision
@@ -21,6 +22,7 @@ _UNKNOWN = (205, 205, 205)
 _TRUTH_WALL = (172, 172, 172)
 _FREE = (255, 255, 255)
 _OCCUPIED = (20, 20, 20)
+_FAILED = (128, 128, 128)
 _ROBOT_COLOURS = [
     (220, 50, 47),
     (38, 139, 210),
@@ -55,10 +57,14 @@ def render_frame(
     clusters: Clusters | None,
     goals_rc: NDArray[np.integer],
     scale: float = 1.0,
+    failed: NDArray[np.bool_] | None = None,
+    unheard: NDArray[np.bool_] | None = None,
 ) -> Image.Image:
     """One RGB picture: ground truth faded under the belief, cluster members, trails, robots, goals.
 
-    ``scale`` is output pixels per cell (below 1 shrinks, box-averaged).
+    ``scale`` is output pixels per cell (below 1 shrinks, box-averaged). Faults: a ``failed`` robot is
+    drawn grey and crossed out; one the centre does not assign to (``unheard``: silent too long, out of
+    range, or not heard since the centre restarted) as a ring without fill.
     """
     rgb = np.empty((*state.shape, 3), dtype=np.uint8)
     rgb[:] = _UNKNOWN
@@ -87,7 +93,15 @@ def render_frame(
         draw.line([(x - rad, y + rad), (x + rad, y - rad)], fill=_robot_colour(i), width=2)
     for i, (r, c) in enumerate(np.asarray(positions_rc)):
         x, y = (c + 0.5) * scale, (r + 0.5) * scale
-        draw.ellipse([x - rad, y - rad, x + rad, y + rad], fill=_robot_colour(i), outline=(0, 0, 0))
+        box = [x - rad, y - rad, x + rad, y + rad]
+        if failed is not None and failed[i]:
+            draw.ellipse(box, fill=_FAILED, outline=(0, 0, 0))
+            draw.line([(x - rad, y - rad), (x + rad, y + rad)], fill=(0, 0, 0), width=1)
+            draw.line([(x - rad, y + rad), (x + rad, y - rad)], fill=(0, 0, 0), width=1)
+        elif unheard is not None and unheard[i]:
+            draw.ellipse(box, fill=None, outline=_robot_colour(i), width=2)
+        else:
+            draw.ellipse(box, fill=_robot_colour(i), outline=(0, 0, 0))
     return img
 
 
@@ -99,24 +113,36 @@ class GifRecorder:
         self.max_side = max_side
         self.frames: list[Image.Image] = []
         self._trails: list[list[NDArray[np.int32]]] = []
-        self._last: tuple[ExplorationSim, Decision | None, NDArray[np.int32]] | None = None
+        self._last: tuple[ExplorationSim, Decision | None, NDArray[np.int32], LinkStatus] | None = None
 
-    def __call__(self, sim: ExplorationSim, decision: Decision | None, goals_rc: NDArray[np.int32]) -> None:
+    def __call__(
+        self, sim: ExplorationSim, decision: Decision | None, goals_rc: NDArray[np.int32], status: LinkStatus
+    ) -> None:
         if not self._trails:
             self._trails = [[] for _ in range(sim.n_robots)]
         for i in range(sim.n_robots):
             self._trails[i].append(sim.positions_rc[i].copy())
-        self._last = (sim, decision, goals_rc.copy())
+        self._last = (sim, decision, goals_rc.copy(), status)
         if sim.steps % self.every == 0:
             self.frames.append(self._frame(scale=min(1.0, self.max_side / max(sim.truth.shape))))
 
     def _frame(self, scale: float) -> Image.Image:
         assert self._last is not None
-        sim, decision, goals = self._last
+        sim, decision, goals, status = self._last
         state = merge_beliefs(sim.beliefs).state(sim.cfg.sensor)  # the team's raw knowledge
         trails = [np.asarray(t, dtype=np.int32) for t in self._trails]
         clusters = decision.clusters if decision is not None else None
-        return render_frame(sim.truth.occupied, state, sim.positions_rc, trails, clusters, goals, scale)
+        return render_frame(
+            sim.truth.occupied,
+            state,
+            sim.positions_rc,
+            trails,
+            clusters,
+            goals,
+            scale,
+            failed=~sim.alive,
+            unheard=~status.assignable,
+        )
 
     def final_frame(self, min_side: int = 400) -> Image.Image:
         """The last state at full resolution (enlarged for small maps)."""

@@ -115,6 +115,12 @@ class CentreMap:
         self._round = [_NOT_HEARD] * n_robots
         self._known = [False] * n_robots
 
+    def accepts(self, message: SparseFrontierMap) -> bool:
+        """Whether :meth:`receive` can take ``message``: a full map always, a delta only on the round the
+        centre holds for that robot (a delta on a base it lacks would corrupt the map)."""
+        i = message.robot
+        return not message.is_delta or (0 <= i < len(self._round) and self._round[i] == message.base_round)
+
     def receive(self, message: SparseFrontierMap) -> None:
         """Take one robot's message: a full map replaces its map, a delta updates the acknowledged one."""
         i = message.robot

@@ -29,11 +29,14 @@ from mrexplore.preprocessing.sparse_map import FULL, SparseFrontierMap, changed_
 from mrexplore.sim.belief import Belief, classify
 from mrexplore.types import CellState, StateGrid
 
-__all__ = ["TeamLink", "RobotSender", "TransmissionTotals", "occupancy_grid_bytes", "TRANSMISSION_MODES"]
+__all__ = ["TeamLink", "LinkStatus", "RobotSender", "TransmissionTotals", "occupancy_grid_bytes", "TRANSMISSION_MODES"]
 
 TransmissionMode = Literal["delta", "full"]
 TRANSMISSION_MODES: tuple[TransmissionMode, ...] = ("delta", "full")
 _ROS_VALUES = {CellState.FREE: 0, CellState.OCCUPIED: 100, CellState.UNKNOWN: -1}
+_ROS_LUT = np.zeros(len(CellState), dtype=np.int8)
+for _state, _value in _ROS_VALUES.items():
+    _ROS_LUT[_state] = _value
 
 
 def occupancy_grid_bytes(state: StateGrid) -> tuple[int, int]:
@@ -51,10 +54,7 @@ def occupancy_grid_bytes(state: StateGrid) -> tuple[int, int]:
     if known is None:
         return HEADER.size, HEADER.size
     box = state[known[0] : known[1], known[2] : known[3]]
-    lut = np.zeros(len(CellState), dtype=np.int8)
-    for s, v in _ROS_VALUES.items():
-        lut[s] = v
-    data = lut[box].tobytes()
+    data = _ROS_LUT[box].tobytes()
     return HEADER.size + len(data), HEADER.size + len(zlib.compress(data, 6))
 
 
@@ -70,6 +70,8 @@ class RobotSender:
         self.robot = robot
         self._acked = np.zeros(shape, dtype=np.uint8)
         self._acked_round = FULL
+        self._acked_grid = np.full(shape, _ROS_VALUES[CellState.UNKNOWN], dtype=np.int8)
+        self._sent_grid: tuple[tuple[slice, slice], NDArray[np.int8]] | None = None
 
     def send(
         self, closed: StateGrid, round_: int, position_rc: tuple[int, int], window: tuple[slice, slice] | None = None
@@ -91,12 +93,29 @@ class RobotSender:
                 incremental = delta_bytes
         return full_bytes, incremental
 
+    def grid_delta_bytes(self, own: StateGrid, window: tuple[slice, slice]) -> int:
+        """Bytes of the generic competitor of the sparse delta: the cells of the int8 occupancy grid that
+        changed since the last acknowledged round, as gaps between their sorted indices (uint32) and their
+        values (int8), zlib level 6, plus the frontier message's header. ``own`` is the robot's grid in
+        ``window`` (every known cell lies inside it)."""
+        ros = _ROS_LUT[own]
+        width = self._acked_grid.shape[1]
+        local = np.flatnonzero(ros != self._acked_grid[window])
+        rows, cols = np.divmod(local, ros.shape[1])
+        cells = (rows + window[0].start) * width + cols + window[1].start
+        gaps = np.diff(cells, prepend=0).astype(np.uint32)
+        self._sent_grid = (window, ros)
+        return HEADER.size + len(zlib.compress(gaps.tobytes() + ros.ravel()[local].tobytes(), 6))
+
     def acknowledged(self, message: SparseFrontierMap) -> None:
         """The centre confirmed this round's message: later deltas apply to it."""
         if not message.is_delta:
             self._acked.fill(0)
         np.put(self._acked, message.cells, message.codes)
         self._acked_round = message.round
+        if self._sent_grid is not None:
+            window, ros = self._sent_grid
+            self._acked_grid[window] = ros
 
 
 @dataclass
@@ -108,6 +127,17 @@ class TransmissionTotals:
     bytes_grid_zlib: int = 0
     bytes_sparse: int = 0
     bytes_sparse_delta: int = 0
+    bytes_grid_delta_zlib: int = 0
+    messages_sent: int = 0
+    """Robot-to-centre messages sent (first tries and resends)."""
+    messages_lost: int = 0
+    messages_resent: int = 0
+    """Whole maps sent again because the centre could not apply a delta (it asked for them)."""
+    acks_lost: int = 0
+    """Centre-to-robot acknowledgements (and requests for a whole map) lost."""
+    bytes_lost: int = 0
+    bytes_resent: int = 0
+    centre_restarts: int = 0
     iou: list[float] = field(default_factory=list)
 
     def as_measures(self) -> dict[str, float | int]:
@@ -117,21 +147,52 @@ class TransmissionTotals:
             "rounds": self.rounds,
             "bytes_grid": self.bytes_grid,
             "bytes_grid_zlib": self.bytes_grid_zlib,
+            "bytes_grid_delta_zlib": self.bytes_grid_delta_zlib,
             "bytes_sparse": self.bytes_sparse,
             "bytes_sparse_delta": self.bytes_sparse_delta,
+            "messages_sent": self.messages_sent,
+            "messages_lost": self.messages_lost,
+            "messages_resent": self.messages_resent,
+            "acks_lost": self.acks_lost,
+            "bytes_lost": self.bytes_lost,
+            "bytes_resent": self.bytes_resent,
+            "centre_restarts": self.centre_restarts,
             "reconstruction_iou_min": round(float(iou.min()), 6),
             "reconstruction_iou_mean": round(float(iou.mean()), 6),
         }
 
 
+@dataclass(frozen=True)
+class LinkStatus:
+    """What the centre knows of its robots after a round (read by the mission and drawn in a GIF)."""
+
+    heard: NDArray[np.bool_]
+    """``(n_robots,) bool``: the robot's map of this round reached the centre."""
+    assignable: NDArray[np.bool_]
+    """``(n_robots,) bool``: heard within the silence limit and at a known cell: the centre assigns to it."""
+    positions_rc: NDArray[np.int32]
+    """``(n_robots, 2) int32`` each robot's cell in its last message that arrived ((-1, -1): none since
+    the centre started)."""
+
+
 class TeamLink:
-    """The robots' senders and the centre's receiver for one episode.
+    """The robots' senders and the centre's receiver for one episode, over a link that may lose messages.
 
     Parameters
     ----------
     mode:
         ``"delta"`` (default): the centre rebuilds from the incremental stream; ``"full"``: from whole
         maps. Both give the same grid; bytes of both are counted either way.
+    message_loss:
+        Probability that a message is lost, each way (robot to centre, and the centre's acknowledgement
+        or request for a whole map back), drawn from ``rng``.
+
+    The protocol under loss: a robot sends its delta against the last map the centre acknowledged to it.
+    A lost message is not acknowledged, so the next delta still applies to what the centre holds. A lost
+    acknowledgement leaves the centre a round ahead of what the robot believes: the centre never applies
+    a delta to a base it lacks, asks for the whole map instead, and the robot resends it at once (the
+    request and the resend may be lost too; then the robot tries again next round). A restarted centre
+    holds no base at all, so every robot's next delta is answered the same way.
     """
 
     def __init__(
@@ -141,20 +202,78 @@ class TeamLink:
         preprocess: PreprocessConfig,
         sensor: SensorConfig,
         mode: TransmissionMode = "delta",
+        message_loss: float = 0.0,
+        rng: np.random.Generator | None = None,
+        silence_rounds: int = 3,
     ) -> None:
         self.preprocess = preprocess
         self.sensor = sensor
         self.mode = mode
+        self.message_loss = message_loss
+        self.silence_rounds = silence_rounds
+        self._rng = rng if rng is not None else np.random.default_rng(0)
         self.centre = CentreMap(n_robots, shape, preprocess.closing_size_cells)
         self.totals = TransmissionTotals()
         self.senders = [RobotSender(i, shape) for i in range(n_robots)]
+        self._last_heard = np.full(n_robots, -1, dtype=np.int64)
+        self._positions = np.full((n_robots, 2), -1, dtype=np.int32)
+        self.status = LinkStatus(np.zeros(n_robots, bool), np.ones(n_robots, bool), self._positions.copy())
         self.robot_ms = 0.0
         """Milliseconds the last round spent on the robots' side (their closing and encoding, which run on
         the robots in a real team, and the byte accounting), as opposed to the centre's decoding and
         rebuilding."""
 
-    def exchange(self, beliefs: Sequence[Belief], positions_rc: NDArray[np.integer]) -> StateGrid:
-        """Run one round: every robot sends, the centre rebuilds; returns the centre's ``(H, W) uint8`` grid."""
+    def restart_centre(self) -> None:
+        """The centre loses everything it held: the robots' maps and bases, their cells, whom it heard."""
+        n = len(self.senders)
+        self.centre = CentreMap(n, self.centre.shape, self.centre.closing_size_cells)
+        self._last_heard[:] = self.totals.rounds - 1
+        self._positions[:] = -1
+        self.totals.centre_restarts += 1
+
+    def _lost(self) -> bool:
+        return self.message_loss > 0 and bool(self._rng.random() < self.message_loss)
+
+    def _send(self, data: bytes) -> SparseFrontierMap | None:
+        """One message over the link: decoded at the centre, or None when lost."""
+        self.totals.messages_sent += 1
+        if self._lost():
+            self.totals.messages_lost += 1
+            self.totals.bytes_lost += len(data)
+            return None
+        return decode(data)
+
+    def _deliver(self, i: int, data: bytes, full: bytes) -> None:
+        """Robot i's message of this round, with the whole-map request and resend when the centre lacks
+        the delta's base, and the acknowledgement back."""
+        received = self._send(data)
+        if received is None:
+            return
+        if not self.centre.accepts(received):
+            if self._lost():  # the centre's request for the whole map
+                self.totals.acks_lost += 1
+                return
+            self.totals.messages_resent += 1
+            self.totals.bytes_resent += len(full)
+            received = self._send(full)
+            if received is None:
+                return
+        self.centre.receive(received)
+        self._last_heard[i] = self.totals.rounds
+        self._positions[i] = received.position_rc
+        if self._lost():
+            self.totals.acks_lost += 1
+        else:
+            self.senders[i].acknowledged(received)
+
+    def exchange(
+        self,
+        beliefs: Sequence[Belief],
+        positions_rc: NDArray[np.integer],
+        sending: NDArray[np.bool_] | None = None,
+    ) -> StateGrid:
+        """Run one round: every robot that can (``sending``, default all) sends, the centre rebuilds;
+        returns the centre's ``(H, W) uint8`` grid and updates :attr:`status`."""
         r = self.totals.rounds
         team_free = np.zeros(self.centre.shape, dtype=bool)
         robot_s = 0.0
@@ -166,22 +285,27 @@ class TeamLink:
             window = belief.window(margin)
             own = classify(belief.log_odds[window], belief.observed[window], self.sensor)
             team_free[window] |= own == CellState.FREE
+            if sending is not None and not sending[i]:
+                robot_s += time.perf_counter() - t0
+                continue
             closed = close_unknown_holes(own, self.preprocess.closing_size_cells)
             pos = (int(positions_rc[i][0]), int(positions_rc[i][1]))
             full_bytes, delta_bytes = self.senders[i].send(closed, r, pos, window)
             raw, packed = occupancy_grid_bytes(own)
             self.totals.bytes_grid += raw
             self.totals.bytes_grid_zlib += packed
+            self.totals.bytes_grid_delta_zlib += self.senders[i].grid_delta_bytes(own, window)
             self.totals.bytes_sparse += len(full_bytes)
             self.totals.bytes_sparse_delta += len(delta_bytes)
             robot_s += time.perf_counter() - t0
-            received = decode(delta_bytes if self.mode == "delta" else full_bytes)
-            self.centre.receive(received)
-            # The simulated link is reliable: the centre acknowledges every message at once.
-            self.senders[i].acknowledged(received)
+            self._deliver(i, delta_bytes if self.mode == "delta" else full_bytes, full_bytes)
         state = self.centre.state()
         t0 = time.perf_counter()
         self.totals.iou.append(free_iou(state == CellState.FREE, team_free))
         self.robot_ms = (robot_s + time.perf_counter() - t0) * 1e3  # the IoU is accounting too
+        heard = self._last_heard == r
+        known = self._positions[:, 0] >= 0
+        assignable = (r - self._last_heard < self.silence_rounds) & known
+        self.status = LinkStatus(heard, assignable, self._positions.copy())
         self.totals.rounds += 1
         return state

@@ -95,6 +95,21 @@ class EpisodeMeasures:
     """Bytes of the sparse frontier maps (paper IV-A), whole every round."""
     bytes_sparse_delta: int = 0
     """Bytes of the incremental sparse maps (changes since the last acknowledged round)."""
+    bytes_grid_delta_zlib: int = 0
+    """The generic competitor of the sparse delta: the int8 grid's cells changed since the last
+    acknowledged round (index gaps and values), zlib-compressed."""
+    messages_sent: int = 0
+    """Map messages robots sent to the centre, resends included."""
+    messages_lost: int = 0
+    messages_resent: int = 0
+    """Whole maps resent because the centre lacked a delta's base (a lost acknowledgement, a restart)."""
+    acks_lost: int = 0
+    """Acknowledgements and whole-map requests from the centre that were lost."""
+    bytes_lost: int = 0
+    bytes_resent: int = 0
+    centre_restarts: int = 0
+    robots_failed: int = 0
+    """Robots that broke down during the mission (``--robot-failure``)."""
     reconstruction_iou_min: float = 1.0
     """Smallest free-space IoU, over rounds, of the centre's rebuilt grid against the robots' own beliefs."""
     reconstruction_iou_mean: float = 1.0
@@ -112,6 +127,7 @@ class EpisodeMeasures:
         done_reason: str,
         transmission: dict[str, Any] | None = None,
         lower_bound: int = 0,
+        robots_failed: int = 0,
     ) -> EpisodeMeasures:
         """Measures of a finished run; ``transmission`` holds the byte and IoU fields (see
         :meth:`~mrexplore.preprocessing.transmission.TransmissionTotals.as_measures`)."""
@@ -134,6 +150,7 @@ class EpisodeMeasures:
             done_reason=done_reason,
             **(transmission or {}),
             lower_bound_steps=lower_bound,
+            robots_failed=robots_failed,
         )
 
     def to_dict(self) -> dict[str, Any]:

@@ -72,6 +72,8 @@ class ExplorationSim:
         self._carry_cells = np.zeros(self.n_robots, dtype=np.float64)
         self.steps = 0
         self.path_len_m = np.zeros(self.n_robots, dtype=np.float64)
+        self.alive = np.ones(self.n_robots, dtype=bool)
+        """``(n_robots,) bool``: False for a robot that failed (it neither drives nor scans any more)."""
         res = truth.resolution_m
         s = cfg.sensor
         self._range_cells = s.range_m / res
@@ -87,11 +89,19 @@ class ExplorationSim:
     def set_path(self, robot: int, path_rc: NDArray[np.integer]) -> None:
         """Give ``robot`` a path ``(k, 2) int`` starting at its current cell (or empty to stand still)."""
         path = np.asarray(path_rc, dtype=np.int32).reshape(-1, 2)
+        if not self.alive[robot]:
+            return  # a failed robot follows no path
         if len(path) and not np.array_equal(path[0], self.positions_rc[robot]):
             raise ValueError(f"path of robot {robot} must start at its cell {self.positions_rc[robot].tolist()}")
         self.paths[robot] = path
         self._path_index[robot] = 0
         self._carry_cells[robot] = 0.0
+
+    def fail(self, robot: int) -> None:
+        """``robot`` breaks down for good: it stops where it stands and scans no more (its belief stays)."""
+        self.alive[robot] = False
+        self.paths[robot] = _EMPTY_PATH
+        self._path_index[robot] = 0
 
     def remaining_path(self, robot: int) -> NDArray[np.int32]:
         """Cells still ahead of ``robot`` on its path, ``(k, 2) int32`` (its current cell first)."""
@@ -106,8 +116,8 @@ class ExplorationSim:
         moved = np.zeros(self.n_robots, dtype=np.float64)
         blocked = np.zeros(self.n_robots, dtype=bool)
         before = self.known_cells
-        for i in range(self.n_robots):
-            moved[i], blocked[i] = self._drive(i)
+        for i in np.flatnonzero(self.alive):
+            moved[i], blocked[i] = self._drive(int(i))
         self._sense_all()
         self.steps += 1
         self.path_len_m += moved
@@ -140,18 +150,16 @@ class ExplorationSim:
         """Every robot scans (beams cast in parallel), then the scans are fused in robot order."""
         noise_sd = self.cfg.sensor.range_noise_m / self.truth.resolution_m
         n_rays = len(self._dirs)
+        live = [int(i) for i in np.flatnonzero(self.alive)]
         # Noise is drawn in robot order from the one generator, so results do not depend on threads.
-        noises = [
-            self.rng.normal(0.0, noise_sd, size=n_rays) if noise_sd > 0 else np.zeros(n_rays)
-            for _ in range(self.n_robots)
-        ]
+        noises = {i: self.rng.normal(0.0, noise_sd, size=n_rays) if noise_sd > 0 else np.zeros(n_rays) for i in live}
 
         def cast(i: int) -> tuple[int, int, int, int]:
             r, c = self.positions_rc[i]
             return scan_mark(self._occupied, int(r), int(c), self._dirs, self._range_cells, noises[i], self._mark[i])
 
-        windows = map_threads(cast, range(self.n_robots))
-        for i, window in enumerate(windows):
+        windows = map_threads(cast, live)
+        for i, window in zip(live, windows, strict=True):
             b = self.beliefs[i]
             robot_new, team_new = apply_scan(
                 self._mark[i], window, b.log_odds, b.observed, self.team_observed, self.explorable, *self._l

@@ -1,0 +1,223 @@
+"""Faults: a robot lost mid-mission, lost messages and acknowledgements, a restarting centre, radio range."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import require_shared_maps, state_grid
+
+from mrexplore.config import FaultConfig, MapConfig, MissionConfig, PreprocessConfig, SensorConfig, SimConfig
+from mrexplore.global_planning.protocol import UNASSIGNED
+from mrexplore.maps.loaders import load_map
+from mrexplore.mission import Mission, run_mission
+from mrexplore.preprocessing.reconstruction import CentreMap
+from mrexplore.preprocessing.sparse_map import sparse_frontier_map
+from mrexplore.preprocessing.transmission import TeamLink
+from mrexplore.sim.belief import Belief
+from mrexplore.strategies import make_strategy, strategy_names
+from mrexplore.types import CellState, MrExploreError
+
+REAL_MAPS = ("houseexpo/json/0a1b29dba355df2ab02630133187bfab.json", "dungeon/easy_img_15.png")
+STRATEGIES = ("utility", "hier")
+
+
+@pytest.fixture(scope="module")
+def real_maps():
+    root = require_shared_maps()
+    return [load_map(str(root / m), MapConfig(resolution_m=0.1)) for m in REAL_MAPS]
+
+
+@pytest.fixture(scope="module")
+def small_map():
+    return load_map("generated:3", MapConfig(resolution_m=0.2))
+
+
+def _run(truth, strategy: str, faults: FaultConfig, robots: int = 3, seed: int = 1):
+    cfg = MissionConfig(max_steps=4000, faults=faults)
+    return run_mission(truth, make_strategy(strategy), SimConfig(robots=robots), cfg, seed=seed, progress=False)
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+@pytest.mark.parametrize("which", [0, 1])
+def test_one_robot_of_three_lost_mid_mission_the_others_finish(real_maps, strategy: str, which: int) -> None:
+    truth = real_maps[which]
+    clean = _run(truth, strategy, FaultConfig()).measures
+    fail_at = clean.steps // 2
+    seen_after: list[np.ndarray] = []
+    where_after: list[list[int]] = []
+    mission = Mission(
+        truth,
+        make_strategy(strategy),
+        SimConfig(robots=3),
+        MissionConfig(max_steps=4000, faults=FaultConfig(robot_failures=((1, fail_at),))),
+        seed=1,
+        progress=False,
+    )
+    while mission.advance():
+        decision = mission.decide()
+        if mission.steps > fail_at:
+            seen_after.append(decision.assignment.cluster_of_robot.copy())
+            where_after.append(mission.sim.positions_rc[1].tolist())
+    m = mission.result().measures
+    assert m.coverage >= 0.99 and m.done_reason == "no_frontiers"
+    assert m.robots_failed == 1 and not mission.sim.alive[1]
+    # The centre stops assigning to the silent robot after silence_rounds rounds (3), and never again.
+    assert len(seen_after) > 3
+    assert all(a[1] == UNASSIGNED for a in seen_after[3:])
+    assert all(w == where_after[0] for w in where_after)  # the failed robot never moved again
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+@pytest.mark.parametrize("which", [0, 1])
+def test_thirty_percent_message_loss_still_explores(real_maps, strategy: str, which: int) -> None:
+    m = _run(real_maps[which], strategy, FaultConfig(message_loss=0.3)).measures
+    assert m.coverage >= 0.99 and m.done_reason == "no_frontiers"
+    assert m.messages_lost > 0 and m.acks_lost > 0 and m.messages_resent > 0
+    assert m.bytes_lost > 0 and m.bytes_resent > 0
+    assert m.messages_sent == 3 * m.rounds + m.messages_resent  # every robot tries once a round, plus resends
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+@pytest.mark.parametrize("which", [0, 1])
+def test_centre_restart_rebuilds_from_the_next_messages(real_maps, strategy: str, which: int) -> None:
+    clean = _run(real_maps[which], strategy, FaultConfig()).measures
+    m = _run(real_maps[which], strategy, FaultConfig(centre_restarts=(clean.steps // 3,))).measures
+    assert m.coverage >= 0.99 and m.done_reason == "no_frontiers"
+    # The restarted centre holds no base: each robot's next delta is refused and its whole map resent once.
+    assert m.centre_restarts == 1 and m.messages_resent == 3 and m.messages_lost == 0
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_robots_out_of_radio_range_explore_alone_and_sync(real_maps, strategy: str) -> None:
+    clean = _run(real_maps[1], strategy, FaultConfig()).measures
+    m = _run(real_maps[1], strategy, FaultConfig(comm_range_m=6.0)).measures
+    assert m.coverage >= 0.99 and m.done_reason == "no_frontiers"
+    assert m.messages_sent < 3 * m.rounds  # some rounds found a robot out of range
+    assert clean.messages_sent == 3 * clean.rounds
+
+
+@pytest.mark.parametrize("strategy", [s for s in strategy_names() if s != "oracle"])
+@pytest.mark.parametrize(
+    "faults",
+    [
+        FaultConfig(robot_failures=((0, 40),)),
+        FaultConfig(message_loss=0.3),
+        FaultConfig(centre_restarts=(30, 60)),
+        FaultConfig(comm_range_m=4.0),
+    ],
+    ids=["failure", "loss", "restart", "range"],
+)
+def test_every_strategy_keeps_working_under_each_fault(small_map, strategy: str, faults: FaultConfig) -> None:
+    m = _run(small_map, strategy, faults, robots=2).measures
+    assert m.coverage >= 0.99 and m.done_reason == "no_frontiers"
+
+
+def test_the_oracle_runs_under_faults(small_map) -> None:
+    m = _run(small_map, "oracle", FaultConfig(message_loss=0.3, robot_failures=((1, 40),)), robots=2).measures
+    assert m.done_reason == "plan_done" and m.robots_failed == 1
+
+
+def test_losing_every_robot_ends_the_mission(small_map) -> None:
+    m = _run(small_map, "utility", FaultConfig(robot_failures=((0, 10), (1, 20))), robots=2).measures
+    assert m.done_reason == "robots_lost" and m.steps == 21 and m.robots_failed == 2
+
+
+def test_a_failure_of_a_robot_outside_the_team_is_refused(small_map) -> None:
+    with pytest.raises(MrExploreError) as err:
+        _run(small_map, "utility", FaultConfig(robot_failures=((3, 10),)), robots=2)
+    assert str(err.value) == "robot failure names robot 3, but the team has robots 0..1; pass an id of the team"
+
+
+class _Script:
+    """A stand-in generator whose draws are given: 0.0 loses a message (below any loss), 0.99 keeps it."""
+
+    def __init__(self, draws: list[float]) -> None:
+        self.draws = list(draws)
+
+    def random(self) -> float:
+        return self.draws.pop(0)
+
+
+ROOM = """
+    #########
+    #.......#
+    #.......#
+    #.......#
+    #########
+"""
+LOSE, KEEP = 0.0, 0.99
+
+
+def _belief_seeing(cols: int) -> Belief:
+    """A belief that has observed the room's first ``cols`` columns (walls included)."""
+    truth = state_grid(ROOM)
+    b = Belief.empty(truth.shape)
+    b.observed[:, :cols] = True
+    b.log_odds[:, :cols] = np.where(truth[:, :cols] == CellState.OCCUPIED, 2.0, -2.0)
+    b.note_window((0, truth.shape[0], 0, cols))
+    return b
+
+
+def test_lost_message_and_lost_acknowledgement_by_hand() -> None:
+    shape = state_grid(ROOM).shape
+    link = TeamLink(1, shape, PreprocessConfig(closing_size_cells=1), SensorConfig(), message_loss=0.5)
+    pos = np.array([[2, 1]])
+    # Round 0: the full map arrives, its acknowledgement is lost.
+    link._rng = _Script([KEEP, LOSE])  # noqa: SLF001 - the script replaces the seeded draws
+    link.exchange([_belief_seeing(4)], pos)
+    assert (link.totals.messages_sent, link.totals.acks_lost, link.status.heard.tolist()) == (1, 1, [True])
+    # Round 1: the robot sends a whole map again (nothing acknowledged); it arrives and is acknowledged.
+    link._rng = _Script([KEEP, KEEP])  # noqa: SLF001
+    link.exchange([_belief_seeing(6)], pos)
+    assert (link.totals.messages_sent, link.totals.messages_resent) == (2, 0)
+    # Round 2: a delta on round 1, lost on the way; the centre keeps round 1 and hears nothing.
+    link._rng = _Script([LOSE])  # noqa: SLF001
+    link.exchange([_belief_seeing(8)], pos)
+    assert (link.totals.messages_lost, link.status.heard.tolist()) == (1, [False])
+    # Round 3: the next delta still applies to round 1 (never acknowledged past it): taken, acknowledged.
+    link._rng = _Script([KEEP, KEEP])  # noqa: SLF001
+    state = link.exchange([_belief_seeing(9)], pos)
+    assert (link.totals.messages_sent, link.totals.messages_resent, link.totals.acks_lost) == (4, 0, 1)
+    assert (state == CellState.FREE).sum() == 21  # the whole room
+    # Round 4: acknowledgement lost; round 5: the robot's delta is on round 3, the centre holds 4: refused,
+    # the centre asks for the whole map and the robot resends it.
+    link._rng = _Script([KEEP, LOSE])  # noqa: SLF001
+    link.exchange([_belief_seeing(9)], pos)
+    link._rng = _Script([KEEP, KEEP, KEEP, KEEP])  # noqa: SLF001
+    link.exchange([_belief_seeing(9)], pos)
+    assert (link.totals.messages_sent, link.totals.messages_resent, link.totals.acks_lost) == (7, 1, 2)
+    assert link.totals.bytes_resent > 0 and link.status.heard.tolist() == [True]
+
+
+def test_delta_centre_equals_the_lossless_one_once_robots_resync(small_map) -> None:
+    """Run a mission with 30% loss, then one lossless round: the centre's grid built from deltas (and the
+    resends the losses caused) equals a fresh centre's built from whole maps of the same beliefs."""
+    mission = Mission(
+        small_map,
+        make_strategy("utility"),
+        SimConfig(robots=3),
+        MissionConfig(max_steps=150, faults=FaultConfig(message_loss=0.3)),
+        seed=2,
+        progress=False,
+    )
+    while mission.advance():
+        mission.decide()
+    link = mission.link
+    assert link.totals.messages_lost > 0 and link.totals.acks_lost > 0
+    link.message_loss = 0.0
+    resynced = link.exchange(mission.sim.beliefs, mission.sim.positions_rc)
+    fresh = TeamLink(3, small_map.shape, link.preprocess, link.sensor, mode="full")
+    assert np.array_equal(resynced, fresh.exchange(mission.sim.beliefs, mission.sim.positions_rc))
+
+
+def test_centre_refuses_a_delta_on_a_base_it_lacks() -> None:
+    grid = state_grid(ROOM)
+    centre = CentreMap(1, grid.shape, 1)
+    full = sparse_frontier_map(grid, 0, 4, (2, 1))
+    delta = sparse_frontier_map(grid, 0, 5, (2, 1))
+    delta = type(delta)(0, 5, grid.shape, (2, 1), delta.cells[:0], delta.codes[:0], delta.seeds, base_round=3)
+    assert centre.accepts(full) and not centre.accepts(delta)
+    centre.receive(full)
+    assert not centre.accepts(delta)  # holds round 4, the delta is on 3
+    with pytest.raises(MrExploreError, match="applies to round 3, the centre holds round 4"):
+        centre.receive(delta)
