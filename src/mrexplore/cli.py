@@ -4,24 +4,28 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import os
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
-import yaml
 
 from mrexplore.bench.report import write_report
 from mrexplore.bench.runner import EpisodeSpec, expand_maps, run_bench
 from mrexplore.config import (
-    GlobalPlanningConfig,
+    FaultConfig,
     MapConfig,
     MissionConfig,
+    RunConfig,
     SimConfig,
     TrainConfig,
-    config_from_dict,
     config_to_dict,
+    config_yaml,
+    read_config_file,
 )
 from mrexplore.maps.loaders import DEFAULT_MAP, load_map
 from mrexplore.maps.map_saver import save_ros_map
@@ -31,9 +35,14 @@ from mrexplore.sim.starts import draw_starts, starts_from_xy
 from mrexplore.strategies import make_strategy, strategy_names
 from mrexplore.types import MrExploreError
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "strict_json"]
 
 EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 130
+CONFIG_HEADER = (
+    "mrexplore settings: every field with its default. Keep the lines you change, pass the file with "
+    "--config FILE to explore, bench or train; flags given on the command line override it."
+)
 DEFAULT_STRATEGY = "hier"
 COMMITMENT_HELP = "goal hysteresis in [0, 1] (1: none; default: 0.5 for nearest/utility, 1 for hier)"
 POLICY_HELP = "weights of the learned strategy (hier), written by 'mrexplore train' (default: the shipped policy)"
@@ -55,8 +64,90 @@ def _xy(text: str) -> tuple[float, float]:
     try:
         x, y = (float(v) for v in text.split(","))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"start must be X,Y in metres, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"must be X,Y in metres, got {text!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise argparse.ArgumentTypeError(f"must be finite X,Y in metres, got {text!r}")
     return (x, y)
+
+
+def _number(low: float, rule: str, *, integer: bool = False, below: float | None = None) -> Any:
+    """An argparse type: a finite number >= ``low`` (and < ``below``), named ``rule`` in its error."""
+
+    def parse(text: str) -> float | int:
+        try:
+            value: float | int = int(text) if integer else float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be {rule}, got {text!r}") from None
+        if not math.isfinite(value) or value < low or (below is not None and value >= below):
+            raise argparse.ArgumentTypeError(f"must be {rule}, got {text!r}")
+        return value
+
+    return parse
+
+
+_POSITIVE = _number(1e-300, "a number > 0")
+_SEED = _number(0, "an integer >= 0", integer=True)
+_COUNT = _number(1, "an integer >= 1", integer=True)
+_WORKERS = _number(0, "an integer >= 0 (0: one per core)", integer=True)
+_STEP = _number(0, "a step >= 0", integer=True)
+_LOSS = _number(0, "a probability in [0, 1)", below=1)
+
+
+def _failure(text: str) -> tuple[int, int]:
+    robot, _, step = text.partition("@")
+    try:
+        pair = (int(robot), int(step))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be ROBOT@STEP (integers, e.g. 1@300), got {text!r}") from None
+    if min(pair) < 0:
+        raise argparse.ArgumentTypeError(f"must be ROBOT@STEP with both >= 0, got {text!r}")
+    return pair
+
+
+def _add_config_flags(p: argparse.ArgumentParser, what: str) -> None:
+    p.add_argument(
+        "--config",
+        default=None,
+        metavar="FILE",
+        help=f"YAML file of settings ('mrexplore config' prints every one with its default); {what}",
+    )
+    p.add_argument(
+        "--robot-failure",
+        type=_failure,
+        action="append",
+        metavar="ID@STEP",
+        help="robot ID stops for good at STEP (repeatable)",
+    )
+    p.add_argument(
+        "--message-loss",
+        type=_LOSS,
+        default=None,
+        metavar="P",
+        help=f"each map message and acknowledgement is lost with probability P (default {FaultConfig.message_loss})",
+    )
+    p.add_argument(
+        "--centre-restart",
+        type=_STEP,
+        action="append",
+        metavar="STEP",
+        help="the centre loses all its state at STEP (repeatable)",
+    )
+    p.add_argument(
+        "--comm-range",
+        type=_POSITIVE,
+        default=None,
+        metavar="M",
+        help="robots farther than M metres from the relay (first start) cannot send (default: unlimited)",
+    )
+
+
+def _add_progress(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="show a progress bar (default: only on a terminal)",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -68,7 +159,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=DEFAULT_MAP,
         help=f"map file (.yaml, .png/.pgm, HouseExpo .json) or generated:SEED (default {DEFAULT_MAP})",
     )
-    ex.add_argument("--robots", type=int, default=SimConfig.robots, help="team size (default 3)")
+    ex.add_argument("--robots", type=_COUNT, default=None, help=f"team size (default {SimConfig.robots})")
     ex.add_argument(
         "--strategy",
         default=DEFAULT_STRATEGY,
@@ -79,15 +170,18 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ex.add_argument("--commitment", type=float, default=None, help=COMMITMENT_HELP)
     ex.add_argument("--policy", default=None, help=POLICY_HELP)
-    ex.add_argument("--seed", type=int, default=0, help="seed of starts and sensor noise (default 0)")
-    ex.add_argument("--max-steps", type=int, default=MissionConfig.max_steps, help="step budget (default 20000)")
-    ex.add_argument("--min-replan-steps", type=int, default=MissionConfig.min_replan_steps, help=MIN_REPLAN_HELP)
+    ex.add_argument("--seed", type=_SEED, default=0, help="seed of starts, sensor noise and faults (default 0)")
+    ex.add_argument("--max-steps", type=_COUNT, default=None, help=f"step budget (default {MissionConfig.max_steps})")
+    ex.add_argument("--min-replan-steps", type=_COUNT, default=None, help=MIN_REPLAN_HELP)
     ex.add_argument(
-        "--resolution", type=float, default=MapConfig.resolution_m, help="working cell size in metres (default 0.05)"
+        "--resolution",
+        type=_POSITIVE,
+        default=None,
+        help=f"working cell size in metres (default {MapConfig.resolution_m})",
     )
     ex.add_argument(
         "--pixel-size",
-        type=float,
+        type=_POSITIVE,
         default=None,
         help="metres per pixel of an image without YAML (default 0.01 grayscale, 0.1 DungeonMaps)",
     )
@@ -108,23 +202,19 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument(
         "--transmission",
         choices=("delta", "full"),
-        default=MissionConfig.transmission,
+        default=None,
         help="what the centre rebuilds from: sparse-map deltas (default) or whole sparse maps (the paper's)",
     )
     ex.add_argument("--json", action="store_true", help="print one JSON object with the measures on stdout")
-    ex.add_argument(
-        "--progress",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="show a progress bar (default: only on a terminal)",
-    )
+    _add_config_flags(ex, "flags override it")
+    _add_progress(ex)
     be = sub.add_parser("bench", help="run many episodes in parallel, append results.csv, write report.md")
     be.add_argument("--maps", required=True, nargs="+", help="map files and/or folders (searched recursively)")
     be.add_argument("--strategies", default="hier,nearest,utility", help="comma-separated strategy names")
-    be.add_argument("--robots", default="3", help="comma-separated team sizes (default 3)")
-    be.add_argument("--seeds", type=int, default=3, help="seeds 0..N-1 per map (default 3)")
+    be.add_argument("--robots", default=None, help=f"comma-separated team sizes (default {SimConfig.robots})")
+    be.add_argument("--seeds", type=_COUNT, default=3, help="seeds 0..N-1 per map (default 3)")
     be.add_argument("--out", required=True, help="folder for results.csv and report.md")
-    be.add_argument("--workers", type=int, default=0, help="worker processes (default: one per core)")
+    be.add_argument("--workers", type=_WORKERS, default=0, help="worker processes (default: one per core)")
     be.add_argument(
         "--ray-address",
         default=None,
@@ -132,59 +222,118 @@ def build_parser() -> argparse.ArgumentParser:
     )
     be.add_argument("--commitment", type=float, default=None, help=COMMITMENT_HELP)
     be.add_argument("--policy", default=None, help=POLICY_HELP)
-    be.add_argument("--resolution", type=float, default=MapConfig.resolution_m, help="cell size, metres")
-    be.add_argument("--max-steps", type=int, default=MissionConfig.max_steps, help="step budget per episode")
-    be.add_argument("--min-replan-steps", type=int, default=MissionConfig.min_replan_steps, help=MIN_REPLAN_HELP)
     be.add_argument(
-        "--progress",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="show a progress bar (default: only on a terminal)",
+        "--resolution", type=_POSITIVE, default=None, help=f"cell size, metres (default {MapConfig.resolution_m})"
     )
+    be.add_argument(
+        "--max-steps",
+        type=_COUNT,
+        default=None,
+        help=f"step budget per episode (default {MissionConfig.max_steps})",
+    )
+    be.add_argument("--min-replan-steps", type=_COUNT, default=None, help=MIN_REPLAN_HELP)
+    _add_config_flags(be, "flags override it; the resume key holds every setting")
+    _add_progress(be)
     tr = sub.add_parser("train", help="train the learned global layer (imitation of a lookahead expert, then PPO)")
     tr.add_argument("--out", required=True, help="folder for policy.pt, checkpoints, log.csv and stages.csv")
-    tr.add_argument("--config", default=None, help="YAML file of TrainConfig fields (see 'mrexplore train --help')")
     budget = tr.add_mutually_exclusive_group()
     budget.add_argument("--minutes", type=float, default=None, help="stop starting stages after this many minutes")
     budget.add_argument("--episodes", type=int, default=None, help="stop after this many training episodes")
-    tr.add_argument("--workers", type=int, default=0, help="worker processes (default: one per core)")
+    tr.add_argument("--workers", type=_WORKERS, default=0, help="worker processes (default: one per core)")
     tr.add_argument("--ray-address", default=None, help="run episodes as Ray tasks: 'local', 'auto' or HOST:PORT")
     tr.add_argument("--resume", action="store_true", help="continue the run in --out after its last finished stage")
-    tr.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    tr.add_argument("--seed", type=_SEED, default=0, help="seed of the run (default 0)")
     tr.add_argument(
         "--train-maps",
         default=str(DEFAULT_TRAIN_MAPS),
         help="folder of training maps (DungeonMaps PNGs; default ../shared/maps/train); procedural plans always",
     )
-    tr.add_argument(
-        "--progress",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="show a progress bar (default: only on a terminal)",
+    _add_config_flags(tr, "train reads its train, sim and mission sections; flags override it")
+    _add_progress(tr)
+    sub.add_parser(
+        "config", help="print every setting with its default as a YAML file for --config", description=CONFIG_HEADER
     )
     return parser
 
 
 def _ints(text: str, name: str) -> list[int]:
     try:
-        return [int(v) for v in text.split(",") if v]
+        values = [int(v) for v in text.split(",") if v]
     except ValueError:
         raise MrExploreError(f"{name} must be comma-separated integers, got {text!r}") from None
+    if not values:
+        raise MrExploreError(f"{name} must name at least one value, got {text!r}")
+    return values
+
+
+def _run_config(args: argparse.Namespace) -> RunConfig:
+    """The settings of this run: the ``--config`` file (or the defaults), then every flag given."""
+    run = read_config_file(args.config) if args.config else RunConfig()
+    faults = run.mission.faults
+    if args.robot_failure:
+        faults = replace(faults, robot_failures=tuple(args.robot_failure))
+    if args.message_loss is not None:
+        faults = replace(faults, message_loss=args.message_loss)
+    if args.centre_restart:
+        faults = replace(faults, centre_restarts=tuple(args.centre_restart))
+    if args.comm_range is not None:
+        faults = replace(faults, comm_range_m=args.comm_range)
+    mission = replace(run.mission, faults=faults)
+    given = vars(args)
+    flags = {"max_steps": "max_steps", "min_replan_steps": "min_replan_steps", "transmission": "transmission"}
+    mission = replace(mission, **{f: given[a] for a, f in flags.items() if given.get(a) is not None})
+    map_cfg = run.map
+    if given.get("resolution") is not None:
+        map_cfg = replace(map_cfg, resolution_m=args.resolution)
+    if given.get("pixel_size") is not None:
+        map_cfg = replace(map_cfg, pixel_size_m=args.pixel_size)
+    sim = run.sim
+    if isinstance(given.get("robots"), int):
+        sim = replace(sim, robots=args.robots)
+    gp = run.global_planning
+    if given.get("commitment") is not None:
+        gp = replace(gp, commitment=args.commitment)
+    return replace(run, map=map_cfg, sim=sim, mission=mission, global_planning=gp)
+
+
+def _check_output(path: str | None, flag: str, folder: bool = False) -> None:
+    """Refuse, before any work, an output path that cannot be written."""
+    if path is None:
+        return
+    p = Path(path)
+    if folder:
+        if p.exists() and not p.is_dir():
+            raise MrExploreError(f"{flag} {p} is a file, not a folder; pass a folder")
+        parent = p if p.exists() else next((q for q in p.parents if q.exists()), Path("."))
+    else:
+        if p.is_dir():
+            raise MrExploreError(f"{flag} {p} is a folder; pass a file path")
+        parent = p.parent
+        if not parent.is_dir():
+            raise MrExploreError(f"{flag} folder {parent} does not exist; create it first")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise MrExploreError(f"{flag} {p} cannot be written ({parent} is not writable); choose a writable path")
 
 
 def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
     strategies = [s for s in args.strategies.split(",") if s]
-    robots = _ints(args.robots, "--robots")
-    if args.seeds < 1:
-        raise MrExploreError(f"--seeds must be >= 1, got {args.seeds}")
+    if not strategies:
+        raise MrExploreError(f"--strategies must name at least one strategy, got {args.strategies!r}")
+    run = _run_config(args)
+    robots = _ints(args.robots, "--robots") if args.robots is not None else [run.sim.robots]
+    if len(set(robots)) != len(robots):
+        raise MrExploreError(f"--robots names a team size twice ({args.robots}); give each size once")
     for n in robots:
         SimConfig(robots=n)
-    MapConfig(resolution_m=args.resolution)
-    MissionConfig(max_steps=args.max_steps, min_replan_steps=args.min_replan_steps)
-    GlobalPlanningConfig(commitment=args.commitment)
+        for robot, _ in run.mission.faults.robot_failures:
+            if robot >= n:
+                raise MrExploreError(f"--robot-failure names robot {robot}, but a team of {n} has robots 0..{n - 1}")
+    _check_output(args.out, "--out", folder=True)
+    for name in strategies:
+        make_strategy(name, policy=args.policy)  # unknown names and unreadable policies fail before any work
     maps = expand_maps(args.maps)
     specs = [
-        EpisodeSpec(m, s, n, seed, args.resolution, args.max_steps, args.commitment, args.min_replan_steps, args.policy)
+        EpisodeSpec(m, s, n, seed, run, args.policy)
         for m in maps
         for s in strategies
         for n in robots
@@ -197,39 +346,18 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
     return f"{ran} episodes run, {len(specs) - ran} already done; wrote {out / 'results.csv'} and {out / 'report.md'}"
 
 
-def _train_config(path: str | None) -> TrainConfig:
-    if path is None:
-        return TrainConfig()
-    p = Path(path)
-    if not p.is_file():
-        raise MrExploreError(f"--config file {p} not found; pass a YAML file of TrainConfig fields")
-    try:
-        data = yaml.safe_load(p.read_text())
-    except yaml.YAMLError as exc:
-        raise MrExploreError(f"--config file {p} is not valid YAML ({type(exc).__name__}); fix it") from None
-    if data is None:
-        return TrainConfig()
-    if not isinstance(data, dict):
-        raise MrExploreError(f"--config file {p} must hold a mapping of TrainConfig fields, got {type(data).__name__}")
-    try:
-        return config_from_dict(TrainConfig, data)
-    except TypeError as exc:
-        raise MrExploreError(f"--config file {p}: {exc}") from None
-
-
 def _train(args: argparse.Namespace) -> str:
     from mrexplore.global_planning.learned.trainer import train
 
-    cfg = _train_config(args.config)
-    if args.minutes is not None and not args.minutes > 0:
+    run = _run_config(args)
+    if args.minutes is not None and not (math.isfinite(args.minutes) and args.minutes > 0):
         raise MrExploreError(f"--minutes must be > 0, got {args.minutes}")
     if args.episodes is not None and args.episodes < 1:
         raise MrExploreError(f"--episodes must be >= 1, got {args.episodes}")
-    if args.workers < 0:
-        raise MrExploreError(f"--workers must be >= 0, got {args.workers}")
+    _check_output(args.out, "--out", folder=True)
     train_dir = Path(args.train_maps)
     result = train(
-        cfg,
+        run.train,
         Path(args.out),
         train_dir if train_dir.is_dir() else None,
         minutes=args.minutes,
@@ -240,6 +368,8 @@ def _train(args: argparse.Namespace) -> str:
         seed=args.seed,
         progress=args.progress,
         say=lambda s: print(s, file=sys.stderr),
+        sim=run.sim,
+        mission=run.mission,
     )
     best = min(result.stages, key=lambda r: r["val_steps_mean"] if r["stage"] == result.best_stage else float("inf"))
     return (
@@ -249,20 +379,32 @@ def _train(args: argparse.Namespace) -> str:
 
 
 def _explore(args: argparse.Namespace) -> dict[str, Any]:
-    map_cfg = MapConfig(resolution_m=args.resolution, pixel_size_m=args.pixel_size)
-    sim_cfg = SimConfig(robots=args.robots)
-    mission_cfg = MissionConfig(
-        max_steps=args.max_steps, min_replan_steps=args.min_replan_steps, transmission=args.transmission
-    )
+    run = _run_config(args)
+    map_cfg, sim_cfg, mission_cfg = run.map, run.sim, run.mission
     strategy = make_strategy(
-        args.strategy, GlobalPlanningConfig(commitment=args.commitment), local=not args.no_local, policy=args.policy
+        args.strategy,
+        run.global_planning,
+        run.preprocess,
+        run.local_planning,
+        local=not args.no_local,
+        policy=args.policy,
+        coscan_cfg=run.coscan,
     )
-    if args.save_map and not Path(args.save_map).resolve().parent.is_dir():
-        raise MrExploreError(f"--save-map folder {Path(args.save_map).parent} does not exist; create it first")
+    _check_output(args.gif, "--gif")
+    _check_output(args.png, "--png")
+    _check_output(args.save_map, "--save-map")
+    for robot, _ in mission_cfg.faults.robot_failures:
+        if robot >= sim_cfg.robots:
+            n = sim_cfg.robots
+            raise MrExploreError(f"--robot-failure names robot {robot}, but a team of {n} has robots 0..{n - 1}")
     truth = load_map(args.map, map_cfg)
     starts = None
     if args.start:
+        if len(set(args.start)) != len(args.start):
+            raise MrExploreError("--start gives the same point twice; give each robot its own start")
         given = starts_from_xy(truth, args.start)
+        if len({tuple(rc) for rc in given.tolist()}) != len(given):
+            raise MrExploreError("--start puts two robots in one cell; give starts at least one cell apart")
         if len(given) == sim_cfg.robots:
             starts = given
         elif len(given) == 1:
@@ -296,15 +438,30 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
         "starts_xy": [list(truth.frame.rc_to_xy((int(r), int(c)))) for r, c in result.starts_rc],
         "policy": strategy.policy,
         "config": {
-            "map": config_to_dict(map_cfg),
-            "sim": config_to_dict(sim_cfg),
-            "mission": config_to_dict(mission_cfg),
-            "preprocess": config_to_dict(strategy.preprocess),
-            "commitment": strategy.commitment,
-            "local": config_to_dict(strategy.local.cfg) if strategy.local is not None else None,
+            **config_to_dict(replace(run, train=TrainConfig())),
+            "strategy": {
+                "preprocess": config_to_dict(strategy.preprocess),
+                "commitment": strategy.commitment,
+                "local": config_to_dict(strategy.local.cfg) if strategy.local is not None else None,
+            },
         },
     }
+    del record["config"]["train"]
     return record
+
+
+def strict_json(value: Any) -> Any:
+    """``value`` with every NaN or infinite float as None and tuples as lists: strict JSON, which
+    ``json.dumps(..., allow_nan=False)`` then always accepts."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {str(k): strict_json(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [strict_json(v) for v in value]
+    if isinstance(value, np.generic):
+        return strict_json(value.item())
+    return value
 
 
 def _kb(n: int) -> str:
@@ -334,18 +491,26 @@ def _summary(rec: dict[str, Any]) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``mrexplore`` command; returns the exit code."""
     argv = list(sys.argv[1:] if argv is None else argv)
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as exc:  # argparse's one-line error (exit 2) or --help (exit 0)
+        return int(exc.code or 0)
     try:
         if args.command == "explore":
             rec = _explore(args)
-            print(json.dumps(rec) if args.json else _summary(rec))
+            print(json.dumps(strict_json(rec), allow_nan=False) if args.json else _summary(rec))
         elif args.command == "bench":
             print(_bench(args, argv))
         elif args.command == "train":
             print(_train(args))
+        elif args.command == "config":
+            print(f"# {CONFIG_HEADER}\n" + config_yaml(RunConfig()), end="")
     except MrExploreError as exc:
         print(f"mrexplore: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("mrexplore: interrupted; finished results are kept, rerun the command to go on", file=sys.stderr)
+        return EXIT_INTERRUPTED
     return 0
 
 

@@ -13,6 +13,7 @@ import numbers
 import types
 import typing
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
+from pathlib import Path
 from typing import Any
 
 from mrexplore.types import MrExploreError
@@ -31,8 +32,11 @@ __all__ = [
     "MissionConfig",
     "LearnedConfig",
     "TrainConfig",
+    "RunConfig",
     "config_to_dict",
     "config_from_dict",
+    "config_yaml",
+    "read_config_file",
 ]
 
 
@@ -106,11 +110,20 @@ class MapConfig(_Checked):
     min_passage_m: float = 0.1
     """Free passages narrower than this are closed: no robot fits (HouseExpo renders leave 1-6 cm slivers
     where walls meet), metres, >= 0 (0: keep every gap)."""
+    max_cells: int = 60_000_000
+    """A map whose working grid would hold more cells is refused before it is built (a 60 M-cell grid takes
+    several GB across the simulator's layers), >= 1."""
+    max_image_pixels: int = 400_000_000
+    """A map image (or HouseExpo raster at 1 cm) with more pixels is refused before it is decoded, >= 1."""
+    max_file_bytes: int = 256_000_000
+    """A map file (image, JSON) larger than this is refused before it is read, >= 1."""
 
     def _validate(self) -> None:
         _require(self.resolution_m > 0, "resolution", "> 0 metres", self.resolution_m)
         _require(self.outside_opening_m > 0, "outside_opening_m", "> 0 metres", self.outside_opening_m)
         _require(self.min_passage_m >= 0, "min_passage_m", ">= 0 metres", self.min_passage_m)
+        for name in ("max_cells", "max_image_pixels", "max_file_bytes"):
+            _require(getattr(self, name) >= 1, name, ">= 1", getattr(self, name))
         if self.pixel_size_m is not None:
             _require(self.pixel_size_m > 0, "pixel-size", "> 0 metres", self.pixel_size_m)
 
@@ -379,9 +392,9 @@ class LearnedConfig(_Checked):
     """Layer 2, learned: the multi-graph network's inputs and size (paper IV-B, eqs. 4-8)."""
 
     hidden: int = 32
-    """Width of node features, queries, keys and values (paper: 32), >= 4."""
+    """Width of node features, queries, keys and values (paper: 32), in [4, 1024]."""
     blocks: int = 2
-    """Operation blocks of [self-graph, cross-graph] attention (paper: l), >= 1."""
+    """Operation blocks of [self-graph, cross-graph] attention (paper: l), in [1, 16]."""
     distance_scale_m: float = 10.0
     """Distances and coordinates are divided by this before entering the network, metres, > 0."""
     size_scale_m: float = 5.0
@@ -398,8 +411,8 @@ class LearnedConfig(_Checked):
     geodesic per centre costs more than the rest of a decision on large maps)."""
 
     def _validate(self) -> None:
-        _require(self.hidden >= 4, "hidden", ">= 4", self.hidden)
-        _require(self.blocks >= 1, "blocks", ">= 1", self.blocks)
+        _require(4 <= self.hidden <= 1024, "hidden", "in [4, 1024]", self.hidden)
+        _require(1 <= self.blocks <= 16, "blocks", "in [1, 16]", self.blocks)
         _require(self.distance_scale_m > 0, "distance_scale_m", "> 0 metres", self.distance_scale_m)
         _require(self.size_scale_m > 0, "size_scale_m", "> 0 metres", self.size_scale_m)
         _require(self.base_scale > 0, "base_scale", "> 0", self.base_scale)
@@ -504,24 +517,124 @@ class TrainConfig(_Checked):
             _require(getattr(self, name) >= 0, name, ">= 0", getattr(self, name))
 
 
-def config_from_dict(cls: type[Any], data: dict[str, Any]) -> Any:
+@dataclass(frozen=True)
+class RunConfig(_Checked):
+    """Every setting of a run, one section per part: the YAML file that ``--config`` reads on explore,
+    bench and train (``mrexplore config`` prints the defaults). A section or field left out keeps its
+    default; flags given on the command line override the file."""
+
+    map: MapConfig = field(default_factory=MapConfig)
+    sim: SimConfig = field(default_factory=SimConfig)
+    mission: MissionConfig = field(default_factory=MissionConfig)
+    preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
+    global_planning: GlobalPlanningConfig = field(default_factory=GlobalPlanningConfig)
+    local_planning: LocalPlanningConfig = field(default_factory=LocalPlanningConfig)
+    coscan: CoScanConfig = field(default_factory=CoScanConfig)
+    train: TrainConfig = field(default_factory=TrainConfig)
+    """Training only (``mrexplore train``), which also reads ``sim`` and ``mission`` (its faults and
+    replanning; the step budget is ``train.max_steps``)."""
+
+
+def config_from_dict(cls: type[Any], data: dict[str, Any], where: str = "") -> Any:
     """Rebuild a config dataclass from :func:`config_to_dict` output (nested configs too); unknown keys
-    are refused by name."""
+    are refused by name (``where`` prefixes the names in messages, e.g. ``sim.``)."""
     import dataclasses
 
+    if not isinstance(data, dict):
+        raise MrExploreError(
+            f"{where.rstrip('.') or 'the config'} must be a mapping of {cls.__name__} fields, got {data!r}"
+        )
     names = {f.name: f for f in dataclasses.fields(cls)}
-    unknown = sorted(set(data) - set(names))
+    unknown = sorted(str(k) for k in set(data) - set(names))
     if unknown:
-        raise MrExploreError(f"unknown {cls.__name__} keys {', '.join(unknown)}; known: {', '.join(names)}")
+        raise MrExploreError(
+            f"unknown {cls.__name__} keys {', '.join(where + k for k in unknown)}; known: {', '.join(names)}"
+        )
     kwargs: dict[str, Any] = {}
     for k, v in data.items():
         factory = names[k].default_factory
         sub = type(factory()) if callable(factory) else None
-        if sub is not None and dataclasses.is_dataclass(sub) and isinstance(v, dict):
-            kwargs[k] = config_from_dict(sub, v)
+        if sub is not None and dataclasses.is_dataclass(sub):
+            kwargs[k] = config_from_dict(sub, v, f"{where}{k}.")
         else:
             kwargs[k] = v
-    return cls(**kwargs)
+    try:
+        return cls(**kwargs)
+    except MrExploreError as exc:
+        raise MrExploreError(f"{where}{exc}" if where else str(exc)) from None
+
+
+def read_config_file(path: str | Path, max_bytes: int = 1 << 20) -> RunConfig:
+    """The :class:`RunConfig` of a YAML file; any problem is one :class:`MrExploreError` naming the file.
+
+    Only plain YAML is read (no tags, no aliases), at most ``max_bytes``."""
+    from mrexplore.safe_yaml import load_yaml_file
+
+    p = Path(path)
+    if not p.is_file():
+        raise MrExploreError(f"--config file {p} not found; 'mrexplore config > {p.name}' writes the defaults")
+    data = load_yaml_file(p, f"--config file {p}", max_bytes)
+    if data is None:
+        return RunConfig()
+    try:
+        return config_from_dict(RunConfig, data)
+    except MrExploreError as exc:
+        raise MrExploreError(f"--config file {p}: {exc}") from None
+
+
+def config_yaml(cfg: Any) -> str:
+    """A config as YAML, each field with its documentation as a comment: what ``mrexplore config`` prints
+    and ``--config`` reads back (tuples are written as lists)."""
+    docs = _field_docs()
+    lines: list[str] = []
+
+    def emit(obj: Any, indent: int) -> None:
+        pad = "  " * indent
+        for f in fields(obj):
+            value = getattr(obj, f.name)
+            doc = docs.get((type(obj).__name__, f.name))
+            if doc:
+                lines.append(f"{pad}# {doc}")
+            if is_dataclass(value):
+                lines.append(f"{pad}{f.name}:")
+                emit(value, indent + 1)
+            else:
+                lines.append(f"{pad}{f.name}: {_yaml_scalar(value)}")
+
+    emit(cfg, 0)
+    return "\n".join(lines) + "\n"
+
+
+def _yaml_scalar(value: Any) -> str:
+    import yaml
+
+    plain = [list(v) if isinstance(v, tuple) else v for v in value] if isinstance(value, tuple) else value
+    return str(yaml.safe_dump(plain, default_flow_style=True, width=10**6)).strip().removesuffix("...").strip()
+
+
+@functools.cache
+def _field_docs() -> dict[tuple[str, str], str]:
+    """``{(class, field): first sentence of its docstring}`` read from this module's source."""
+    import ast
+    import inspect
+    import sys
+
+    tree = ast.parse(inspect.getsource(sys.modules[__name__]))
+    out: dict[tuple[str, str], str] = {}
+    for node in tree.body:
+        if not isinstance(node, ast.ClassDef):
+            continue
+        body = node.body
+        for a, b in zip(body, body[1:], strict=False):
+            if (
+                isinstance(a, ast.AnnAssign)
+                and isinstance(a.target, ast.Name)
+                and isinstance(b, ast.Expr)
+                and isinstance(b.value, ast.Constant)
+                and isinstance(b.value.value, str)
+            ):
+                out[(node.name, a.target.id)] = " ".join(b.value.value.split())
+    return out
 
 
 def config_to_dict(cfg: Any) -> dict[str, Any]:

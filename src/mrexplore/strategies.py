@@ -465,12 +465,14 @@ def make_strategy(
     local_cfg: LocalPlanningConfig | None = None,
     local: bool = True,
     policy: str | None = None,
+    coscan_cfg: CoScanConfig | None = None,
 ) -> ExplorationPipeline:
     """The pipeline called ``name``; unknown names raise a one-line error listing the choices.
 
     ``local=False`` (or a ``-nolocal`` suffix on the name) removes the local layer: robots go to cluster
     centres, for ablations; the pipeline's name then carries the suffix. ``policy`` is the weights file
-    of a learned strategy (None: the policy shipped in the package).
+    of a learned strategy (None: the policy shipped in the package); ``coscan_cfg`` sets CoScan-2D's task
+    sampling and clustering.
     """
     if name.endswith(NO_LOCAL_SUFFIX) and name.removesuffix(NO_LOCAL_SUFFIX) in STRATEGIES:
         name, local = name.removesuffix(NO_LOCAL_SUFFIX), False
@@ -485,4 +487,6 @@ def make_strategy(
     if not local and pipeline.local is not None:
         pipeline.local = None
         pipeline.name += NO_LOCAL_SUFFIX
+    if isinstance(pipeline, CoScanPipeline) and coscan_cfg is not None:
+        pipeline.coscan = coscan_cfg
     return pipeline

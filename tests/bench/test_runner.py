@@ -25,9 +25,10 @@ from mrexplore.bench.runner import (
     size_class,
 )
 from mrexplore.cli import main
+from mrexplore.config import MapConfig, MissionConfig, RunConfig
 from mrexplore.types import MrExploreError
 
-FAST = dict(resolution_m=0.2, max_steps=3000)
+FAST = dict(run=RunConfig(map=MapConfig(resolution_m=0.2), mission=MissionConfig(max_steps=3000)))
 
 
 def test_size_classes() -> None:

@@ -129,7 +129,7 @@ def test_dungeon_rgb_colours_and_start_marker(tmp_path) -> None:
 @pytest.mark.parametrize(
     ("name", "content", "message"),
     [
-        ("bad.yaml", "image: [unclosed", "malformed map YAML"),
+        ("bad.yaml", "image: [unclosed", "map YAML .* is not valid YAML at line 1"),
         ("nokey.yaml", "resolution: 0.05\n", "missing key 'image'"),
         ("bad.png", "not an image", "cannot read map image"),
         ("bad.json", "{]", "malformed HouseExpo JSON"),

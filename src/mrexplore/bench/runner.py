@@ -1,19 +1,26 @@
 """Run many (map, strategy, robots, seed) episodes in worker processes; one CSV row per finished episode.
 
-Rows are appended as episodes finish, so a killed run loses only the episodes in flight; rerunning the
-same command skips every episode already in the file.
+Rows are appended as episodes finish, each with one write of a whole line, so a killed run loses only
+the episodes in flight; a line cut short by a kill is dropped on the next run and its episode rerun.
+Rerunning the same command skips every episode already in the file. An episode is known by its map
+(resolved path), strategy, team size, seed, the hash of every other setting that changes a result (the
+whole :class:`~mrexplore.config.RunConfig` but for training) and, for learned strategies, the policy's
+sha256. A folder holds one set of settings (``settings.yaml``): a rerun with others is refused, naming
+what differs. Workers exit with the run (:mod:`mrexplore.workers`).
 """
 
 from __future__ import annotations
 
 import csv
 import functools
-import multiprocessing
+import hashlib
+import io
+import json
 import os
 import sys
-from collections.abc import Iterable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from dataclasses import dataclass
+from collections.abc import Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, wait
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -22,13 +29,15 @@ import yaml
 from PIL import Image
 from tqdm import tqdm
 
-from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig
+from mrexplore.config import MapConfig, RunConfig, TrainConfig, config_to_dict
 from mrexplore.maps.ground_truth import GroundTruthMap
-from mrexplore.maps.loaders import load_map
+from mrexplore.maps.loaders import is_generator_spec, load_map
 from mrexplore.mission import run_mission
-from mrexplore.strategies import make_strategy
+from mrexplore.safe_yaml import load_yaml_file
+from mrexplore.strategies import LEARNED, NO_LOCAL_SUFFIX, make_strategy
 from mrexplore.threads import THREADS_ENV
 from mrexplore.types import MrExploreError
+from mrexplore.workers import stop_pool, worker_pool
 
 __all__ = [
     "EpisodeSpec",
@@ -39,6 +48,8 @@ __all__ = [
     "dataset_of",
     "parse_curve",
     "expand_maps",
+    "settings_hash",
+    "drop_partial_tail",
     "COLUMNS",
     "MAP_SUFFIXES",
 ]
@@ -49,7 +60,8 @@ LARGE_M2 = 300.0
 CURVE_EVERY_STEPS = 50
 """The coverage curve is kept in the CSV every this many steps (and at the last step)."""
 COLUMNS = [
-    "map", "map_path", "dataset", "strategy", "robots", "seed", "size_class", "free_area_m2",
+    "map", "map_path", "map_resolved", "settings", "policy_sha256", "dataset", "strategy", "robots", "seed",
+    "size_class", "free_area_m2",
     "steps", "coverage", "steps_to_90", "steps_to_95", "steps_to_99", "lower_bound_steps",
     "path_len_max_m", "path_len_sum_m", "overlap", "decisions", "plan_ms_mean", "plan_ms_p95", "wall_s",
     "done_reason", "rounds", "bytes_grid", "bytes_grid_zlib", "bytes_grid_delta_zlib", "bytes_sparse",
@@ -68,16 +80,54 @@ class EpisodeSpec:
     strategy: str
     robots: int
     seed: int
-    resolution_m: float = 0.05
-    max_steps: int = 20000
-    commitment: float | None = None
-    min_replan_steps: int = MissionConfig.min_replan_steps
+    run: RunConfig = field(default_factory=RunConfig)
+    """Every setting but the team size (``robots`` overrides ``run.sim.robots``); ``run.train`` is unused."""
     policy: str | None = None
     """Weights of a learned strategy (None: the shipped policy)."""
 
     @property
-    def key(self) -> tuple[str, str, int, int]:
-        return (self.map_path, self.strategy, self.robots, self.seed)
+    def map_resolved(self) -> str:
+        """The map as the resume key knows it: the real path of a file, the spec of a generated map."""
+        return self.map_path if is_generator_spec(self.map_path) else os.path.realpath(self.map_path)
+
+    @property
+    def settings(self) -> str:
+        """Hash of every setting that changes a result, apart from map, strategy, team size and seed."""
+        return settings_hash(self.run)
+
+    @property
+    def policy_sha256(self) -> str:
+        """sha256 of the policy a learned strategy runs ('' for the others)."""
+        return _policy_sha(self.policy) if _base_name(self.strategy) in LEARNED else ""
+
+    @property
+    def key(self) -> tuple[str, str, int, int, str, str]:
+        return (self.map_resolved, self.strategy, self.robots, self.seed, self.settings, self.policy_sha256)
+
+
+def _base_name(strategy: str) -> str:
+    return strategy.removesuffix(NO_LOCAL_SUFFIX)
+
+
+@functools.lru_cache(maxsize=16)
+def _policy_sha(policy: str | None) -> str:
+    from mrexplore.global_planning.learned.checkpoint import default_policy_path, file_sha256
+
+    path = Path(policy) if policy else default_policy_path()
+    return file_sha256(path) if path.is_file() else ""
+
+
+def _settings_dict(run: RunConfig) -> dict[str, Any]:
+    d = config_to_dict(replace(run, train=TrainConfig()))
+    del d["train"]
+    del d["sim"]["robots"]  # a column of its own
+    return d
+
+
+def settings_hash(run: RunConfig) -> str:
+    """16 hex digits of the sha256 of a run's result-changing settings (see :class:`EpisodeSpec`)."""
+    text = json.dumps(_settings_dict(run), sort_keys=True, default=list)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def size_class(free_area_m2: float) -> str:
@@ -112,30 +162,37 @@ def parse_curve(text: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 @functools.lru_cache(maxsize=2)
-def _load_shared(map_path: str, resolution_m: float) -> GroundTruthMap:
+def _load_shared(map_path: str, cfg: MapConfig) -> GroundTruthMap:
     """A worker runs the episodes of one map one after another: load it once (read-only, as missions
     never write the ground truth)."""
-    truth = load_map(map_path, MapConfig(resolution_m=resolution_m))
+    truth = load_map(map_path, cfg)
     truth.occupied.flags.writeable = False
     return truth
 
 
 def run_episode(spec: EpisodeSpec) -> dict[str, Any]:
     """Run one episode and return its CSV row."""
-    truth = _load_shared(spec.map_path, spec.resolution_m)
+    run = spec.run
+    truth = _load_shared(spec.map_path, run.map)
+    strategy = make_strategy(
+        spec.strategy,
+        run.global_planning,
+        run.preprocess,
+        run.local_planning,
+        policy=spec.policy,
+        coscan_cfg=run.coscan,
+    )
     result = run_mission(
-        truth,
-        make_strategy(spec.strategy, GlobalPlanningConfig(commitment=spec.commitment), policy=spec.policy),
-        SimConfig(robots=spec.robots),
-        MissionConfig(max_steps=spec.max_steps, min_replan_steps=spec.min_replan_steps),
-        seed=spec.seed,
-        progress=False,
+        truth, strategy, replace(run.sim, robots=spec.robots), run.mission, seed=spec.seed, progress=False
     )
     sim = result.sim
     free_m2 = float((sim.explorable & ~truth.occupied).sum()) * truth.resolution_m**2
     return {
         "map": truth.name,
         "map_path": spec.map_path,
+        "map_resolved": spec.map_resolved,
+        "settings": spec.settings,
+        "policy_sha256": spec.policy_sha256,
         "dataset": dataset_of(spec.map_path),
         "strategy": spec.strategy,
         "robots": spec.robots,
@@ -155,12 +212,12 @@ def read_rows(path: Path) -> list[dict[str, str]]:
         return list(csv.DictReader(f))
 
 
-def _done_keys(rows: Iterable[dict[str, str]]) -> set[tuple[str, str, int, int]]:
-    return {(r["map_path"], r["strategy"], int(r["robots"]), int(r["seed"])) for r in rows}
+def _row_key(r: dict[str, str]) -> tuple[str, str, int, int, str, str]:
+    return (r["map_resolved"], r["strategy"], int(r["robots"]), int(r["seed"]), r["settings"], r["policy_sha256"])
 
 
 def _check_columns(path: Path) -> None:
-    if not path.exists():
+    if not path.exists() or path.stat().st_size == 0:
         return
     with open(path, newline="") as f:
         header = next(csv.reader(f), None)
@@ -170,15 +227,95 @@ def _check_columns(path: Path) -> None:
         )
 
 
-def _append(path: Path, row: dict[str, Any]) -> None:
-    new = not path.exists()
-    with open(path, "a", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=COLUMNS)
-        if new:
-            w.writeheader()
-        w.writerow({k: ("" if row[k] is None else row[k]) for k in COLUMNS})
-        f.flush()
+def drop_partial_tail(path: Path) -> int:
+    """Cut a last line that a kill left half-written (no newline at its end); returns bytes dropped."""
+    if not path.exists():
+        return 0
+    with open(path, "rb+") as f:
+        size = f.seek(0, os.SEEK_END)
+        if size == 0:
+            return 0
+        f.seek(size - 1)
+        if f.read(1) == b"\n":
+            return 0
+        f.seek(max(0, size - (1 << 20)))
+        tail = f.read()
+        keep = size - len(tail) + tail.rfind(b"\n") + 1 if b"\n" in tail else 0
+        f.truncate(keep)
         os.fsync(f.fileno())
+        return size - keep
+
+
+def _line(row: dict[str, Any]) -> bytes:
+    buf = io.StringIO()
+    csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n").writerow(
+        {k: ("" if row[k] is None else row[k]) for k in COLUMNS}
+    )
+    return buf.getvalue().encode()
+
+
+def _append(path: Path, row: dict[str, Any]) -> None:
+    """Append one row with a single write of its whole line (the header first into a new file, atomically)."""
+    if not path.exists() or path.stat().st_size == 0:
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_text(",".join(COLUMNS) + "\n")
+        tmp.replace(path)
+    fd = os.open(path, os.O_WRONLY | os.O_APPEND)
+    try:
+        os.write(fd, _line(row))
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _check_settings(folder: Path, specs: Sequence[EpisodeSpec], rows: list[dict[str, str]]) -> None:
+    """One folder, one set of settings: refuse others, naming the fields that differ; write settings.yaml."""
+    wanted = {s.settings for s in specs}
+    if len(wanted) > 1:
+        raise MrExploreError("one bench run must use one set of settings; split it into several --out folders")
+    mine = next(iter(wanted))
+    saved = folder / "settings.yaml"
+    current = _plain(_settings_dict(specs[0].run))
+    if any(r["settings"] != mine for r in rows):
+        before = load_yaml_file(saved, f"{saved}") if saved.exists() else None
+        differ = ", ".join(_diff(before, current)) if isinstance(before, dict) else "see settings.yaml"
+        raise MrExploreError(
+            f"{folder} holds episodes run with other settings ({differ}); pass a new --out folder, "
+            "or rerun with the same settings"
+        )
+    policies: dict[str, set[str]] = {}
+    for r in rows:
+        policies.setdefault(r["strategy"], set()).add(r["policy_sha256"])
+    for s in specs:
+        old = policies.get(s.strategy, set()) - {s.policy_sha256}
+        if old:
+            raise MrExploreError(
+                f"{folder} holds {s.strategy} episodes run with another policy (sha256 {sorted(old)[0][:12]}...); "
+                "pass a new --out folder, or the same --policy"
+            )
+    if not saved.exists():
+        tmp = saved.with_name(saved.name + ".tmp")
+        tmp.write_text(f"# settings of every episode in this folder (hash {mine})\n" + yaml.safe_dump(current))
+        tmp.replace(saved)
+
+
+def _diff(a: Any, b: Any, where: str = "") -> list[str]:
+    """Dotted names of the fields where two settings dicts differ."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        out: list[str] = []
+        for k in sorted(set(a) | set(b), key=str):
+            out += _diff(a.get(k), b.get(k), f"{where}{k}.")
+        return out
+    return [] if a == b else [f"{where.rstrip('.')} {a!r} there, {b!r} now"]
+
+
+def _plain(value: Any) -> Any:
+    """Settings as YAML gives them back: tuples as lists, nested."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, tuple | list):
+        return [_plain(v) for v in value]
+    return value
 
 
 def run_bench(
@@ -192,13 +329,18 @@ def run_bench(
     worker processes, or as Ray tasks when ``ray_address`` is given (``local`` starts a Ray instance on
     this machine; ``auto`` or ``HOST:PORT`` joins a running cluster).
 
-    Returns the number of episodes run now. Each finished episode is appended (and flushed) at once.
+    Returns the number of episodes run now. Each finished episode is appended (and synced) at once.
     """
+    if not specs:
+        return 0
     for name, policy in {(s.strategy, s.policy) for s in specs}:
         make_strategy(name, policy=policy)  # unknown names and unreadable policies fail before any work starts
     results_csv.parent.mkdir(parents=True, exist_ok=True)
     _check_columns(results_csv)
-    done = _done_keys(read_rows(results_csv))
+    drop_partial_tail(results_csv)
+    rows = read_rows(results_csv)
+    _check_settings(results_csv.parent, specs, rows)
+    done = {_row_key(r) for r in rows}
     todo = list({s.key: s for s in specs if s.key not in done}.values())  # a spec given twice runs once
     # Largest maps first, so that no long episode starts last and leaves the other workers idle.
     todo.sort(key=lambda s: -_area_hint(s.map_path))
@@ -213,22 +355,20 @@ def run_bench(
             _append(results_csv, run_episode(s))
             bar.update()
     else:
-        # Spawned, not forked: a parent that already ran a mission holds thread pools, and a forked
-        # child inherits their locks in whatever state they were.
         # Episodes already fill the cores: each worker's kernels run on as many threads as are left over.
         threads = max(1, (os.cpu_count() or 1) // workers)
-        with ProcessPoolExecutor(
-            max_workers=workers,
-            mp_context=multiprocessing.get_context("spawn"),
-            initializer=_set_threads,
-            initargs=(threads,),
-        ) as pool:
+        pool = worker_pool(workers, _set_threads, (threads,))
+        try:
             pending: set[Future[dict[str, Any]]] = {pool.submit(run_episode, s) for s in todo}
             while pending:
                 finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                 for fut in finished:
                     _append(results_csv, fut.result())
                     bar.update()
+        except BaseException:
+            stop_pool(pool)  # a kill, an interrupt or a failed episode: no worker runs on
+            raise
+        pool.shutdown()
     bar.close()
     return len(todo)
 
@@ -283,7 +423,7 @@ def expand_maps(items: Sequence[str]) -> list[str]:
     room-label images ``*_spaces.png`` and images that have a YAML beside them are skipped)."""
     out: list[str] = []
     for item in items:
-        if item.startswith("generated"):
+        if is_generator_spec(item):
             out.append(item)
             continue
         p = Path(item)

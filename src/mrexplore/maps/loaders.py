@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from PIL import Image, ImageDraw, UnidentifiedImageError
 
 from mrexplore.config import MapConfig
@@ -21,9 +21,10 @@ from mrexplore.maps.floorplan import FloorplanSpec, generate_floorplan
 from mrexplore.maps.frame import GridFrame
 from mrexplore.maps.ground_truth import GroundTruthMap, close_narrow_gaps, mark_outside_as_obstacle
 from mrexplore.maps.resample import resample_obstacles
+from mrexplore.safe_yaml import load_yaml_file
 from mrexplore.types import MrExploreError
 
-__all__ = ["load_map", "DEFAULT_MAP", "GRAYSCALE_PIXEL_M", "DUNGEON_PIXEL_M", "HOUSEEXPO_RASTER_M"]
+__all__ = ["load_map", "is_generator_spec", "DEFAULT_MAP", "GRAYSCALE_PIXEL_M", "DUNGEON_PIXEL_M", "HOUSEEXPO_RASTER_M"]
 
 DEFAULT_MAP = "generated:0"
 """The built-in map: a procedural floor plan (license-clean, made here from a seed)."""
@@ -34,6 +35,8 @@ DUNGEON_PIXEL_M = 0.1
 HOUSEEXPO_RASTER_M = 0.01
 """HouseExpo polygons are rasterised at 1 cm, like the dataset's own renders, then min-pooled."""
 _HOUSEEXPO_PAD_M = 0.25
+_MAX_COORD_M = 1e7
+"""Map origins farther than this from 0 (10,000 km) are refused as nonsense."""
 _GRAY_FREE_MIN = 128
 _DUNGEON_OBSTACLE = (127, 127, 127)
 _DUNGEON_FREE = (195, 195, 194)
@@ -60,13 +63,21 @@ def load_map(spec: str | Path, cfg: MapConfig | None = None) -> GroundTruthMap:
     """
     cfg = cfg or MapConfig()
     text = str(spec)
-    if text.startswith("generated"):
-        return _load_generated(text, cfg)
     path = Path(text)
+    if is_generator_spec(text):
+        return _load_generated(text, cfg)
     if not path.exists():
         raise MrExploreError(f"map file not found: {path}; pass an existing map file with --map")
     if path.is_dir():
         raise MrExploreError(f"map path is a folder: {path}; pass one map file with --map")
+    if not path.is_file():
+        raise MrExploreError(f"map path {path} is not a regular file; pass a map file with --map")
+    size = path.stat().st_size
+    if size > cfg.max_file_bytes:
+        raise MrExploreError(
+            f"map file {path} is {size} bytes, over the limit of {cfg.max_file_bytes} (map.max_file_bytes); "
+            "raise it in --config if the map is real"
+        )
     suffix = path.suffix.lower()
     if suffix in (".yaml", ".yml"):
         return _load_ros_yaml(path, cfg)
@@ -80,6 +91,31 @@ def load_map(spec: str | Path, cfg: MapConfig | None = None) -> GroundTruthMap:
     raise MrExploreError(
         f"unsupported map format {suffix!r}: {path}; use a ROS .yaml, a .png/.pgm image or a HouseExpo .json"
     )
+
+
+def is_generator_spec(text: str) -> bool:
+    """Whether ``text`` names the procedural generator (``generated`` or ``generated:SEED``) rather than a
+    file: an existing file of that name is always read as the file."""
+    return (text == "generated" or text.startswith("generated:")) and not Path(text).exists()
+
+
+def _check_cells(name: str, extent_px: tuple[int, int], pixel_m: float, cfg: MapConfig) -> None:
+    """Refuse, before any work, a map whose working grid would exceed ``cfg.max_cells``."""
+    h = math.ceil(extent_px[0] * pixel_m / cfg.resolution_m)
+    w = math.ceil(extent_px[1] * pixel_m / cfg.resolution_m)
+    if h * w > cfg.max_cells:
+        raise MrExploreError(
+            f"map {name} at {cfg.resolution_m} m per cell would be {h} x {w} = {h * w} cells, over the limit "
+            f"of {cfg.max_cells} (map.max_cells); use a coarser --resolution or raise the limit in --config"
+        )
+
+
+def _check_pixels(name: str, w: int, h: int, cfg: MapConfig) -> None:
+    if w * h > cfg.max_image_pixels:
+        raise MrExploreError(
+            f"map {name} is {w} x {h} = {w * h} pixels, over the limit of {cfg.max_image_pixels} "
+            "(map.max_image_pixels); raise it in --config if the map is real"
+        )
 
 
 def _finish(
@@ -100,19 +136,19 @@ def _load_generated(text: str, cfg: MapConfig) -> GroundTruthMap:
     _, _, seed_text = text.partition(":")
     try:
         seed = int(seed_text) if seed_text else 0
+        if seed < 0:
+            raise ValueError
     except ValueError:
-        raise MrExploreError(f"bad generator spec {text!r}; write generated:SEED with an integer SEED") from None
-    obstacle = generate_floorplan(FloorplanSpec(seed=seed), cfg.resolution_m)
+        raise MrExploreError(f"bad generator spec {text!r}; write generated:SEED with an integer SEED >= 0") from None
+    spec = FloorplanSpec(seed=seed)
+    _check_cells(text, (math.ceil(spec.height_m), math.ceil(spec.width_m)), 1.0, cfg)
+    obstacle = generate_floorplan(spec, cfg.resolution_m)
     frame = GridFrame(obstacle.shape[0], obstacle.shape[1], cfg.resolution_m)
     return _finish(obstacle, frame, f"generated:{seed}", None, cfg)
 
 
 def _read_yaml(path: Path) -> dict[str, Any]:
-    try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise MrExploreError(f"malformed map YAML {path}: {reason}; give a ROS map_server YAML") from None
+    data = load_yaml_file(path, f"map YAML {path}")
     if not isinstance(data, dict):
         raise MrExploreError(f"malformed map YAML {path}: not a mapping; give a ROS map_server YAML")
     return data
@@ -127,12 +163,22 @@ def _yaml_image_name(path: Path) -> str | None:
     return Path(str(image)).name if image is not None else None
 
 
-def _open_image(path: Path) -> Image.Image:
+def _open_image(path: Path, cfg: MapConfig, pixel_m: float | None = None) -> Image.Image:
+    """Decode an image once its header passed the pixel limit (and, given ``pixel_m``, the cell limit)."""
     try:
-        img = Image.open(path)
-        img.load()
-    except (OSError, UnidentifiedImageError, ValueError) as exc:
+        if not path.is_file():
+            raise MrExploreError(f"map image {path} not found; fix the path in the map YAML")
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            img = Image.open(path)
+            _check_pixels(str(path), img.width, img.height, cfg)
+            if pixel_m is not None:
+                _check_cells(str(path), (img.height, img.width), pixel_m, cfg)
+            img.load()
+    except (OSError, UnidentifiedImageError, ValueError, SyntaxError, Image.DecompressionBombWarning) as exc:
         raise MrExploreError(f"cannot read map image {path}: {exc}; give a PNG/PGM map image") from None
+    except Image.DecompressionBombError:
+        raise MrExploreError(f"map image {path} is larger than any map should be; give a real map image") from None
     return img
 
 
@@ -146,11 +192,18 @@ def _load_ros_yaml(path: Path, cfg: MapConfig) -> GroundTruthMap:
         origin = [float(v) for v in data.get("origin", [0.0, 0.0, 0.0])]
         negate = int(data.get("negate", 0))
         free_th = float(data.get("free_thresh", 0.196))
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise MrExploreError(f"malformed map YAML {path}: {exc}; fix the numeric fields") from None
-    if resolution <= 0 or len(origin) < 2:
+    if not (math.isfinite(resolution) and resolution > 0) or len(origin) < 2:
         raise MrExploreError(f"malformed map YAML {path}: resolution must be > 0 and origin [x, y, yaw]")
-    img = _open_image(path.parent / str(data["image"]))
+    if not all(math.isfinite(v) and abs(v) <= _MAX_COORD_M for v in origin) or not math.isfinite(free_th):
+        raise MrExploreError(
+            f"malformed map YAML {path}: origin and free_thresh must be finite numbers, origin within "
+            f"{_MAX_COORD_M:g} m; fix the numeric fields"
+        )
+    if not isinstance(data["image"], str):
+        raise MrExploreError(f"malformed map YAML {path}: image must be a file name; give a ROS map_server YAML")
+    img = _open_image(path.parent / data["image"], cfg, resolution)
     gray = np.asarray(img.convert("L"), dtype=np.float64)
     # map_server: p = (255 - v) / 255 (negate 0); free below free_thresh, occupied above occupied_thresh,
     # unknown between. Only free counts as free: unknown ground truth is obstacle, nothing is known behind it.
@@ -168,7 +221,7 @@ def _is_dungeon(rgb: np.ndarray) -> bool:
 
 
 def _load_image(path: Path, cfg: MapConfig) -> GroundTruthMap:
-    img = _open_image(path)
+    img = _open_image(path, cfg)
     start_rc = None
     if img.mode in ("RGB", "RGBA", "P") and _is_dungeon(rgb := np.asarray(img.convert("RGB"))):
         pixel = cfg.pixel_size_m or DUNGEON_PIXEL_M
@@ -182,6 +235,7 @@ def _load_image(path: Path, cfg: MapConfig) -> GroundTruthMap:
     else:
         pixel = cfg.pixel_size_m or GRAYSCALE_PIXEL_M
         obstacle = np.asarray(img.convert("L")) < _GRAY_FREE_MIN
+    _check_cells(str(path), obstacle.shape, pixel, cfg)
     obstacle = resample_obstacles(obstacle, pixel, cfg.resolution_m)
     frame = GridFrame(obstacle.shape[0], obstacle.shape[1], cfg.resolution_m)
     if start_rc is not None:
@@ -193,9 +247,10 @@ def _load_houseexpo_json(path: Path, cfg: MapConfig) -> GroundTruthMap:
     try:
         data = json.loads(path.read_text())
         verts = np.asarray(data["verts"], dtype=np.float64)
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError, RecursionError) as exc:
+        reason = str(exc).splitlines()[0][:80] if str(exc) else ""
         raise MrExploreError(
-            f"malformed HouseExpo JSON {path}: {type(exc).__name__} {exc}; give a file with a 'verts' polygon"
+            f"malformed HouseExpo JSON {path}: {type(exc).__name__} {reason}; give a file with a 'verts' polygon"
         ) from None
     if verts.ndim != 2 or verts.shape[1] != 2 or len(verts) < 3 or not np.isfinite(verts).all():
         raise MrExploreError(f"malformed HouseExpo JSON {path}: 'verts' must be >= 3 [x, y] points in metres")
@@ -203,6 +258,8 @@ def _load_houseexpo_json(path: Path, cfg: MapConfig) -> GroundTruthMap:
     hi = verts.max(axis=0) + _HOUSEEXPO_PAD_M
     w = math.ceil((hi[0] - lo[0]) / HOUSEEXPO_RASTER_M)
     h = math.ceil((hi[1] - lo[1]) / HOUSEEXPO_RASTER_M)
+    _check_pixels(str(path), w, h, cfg)
+    _check_cells(str(path), (h, w), HOUSEEXPO_RASTER_M, cfg)
     canvas = Image.new("L", (w, h), 0)
     # Row grows with -y (map frame convention), so flip y when rasterising.
     px = [((x - lo[0]) / HOUSEEXPO_RASTER_M, (hi[1] - y) / HOUSEEXPO_RASTER_M) for x, y in verts]

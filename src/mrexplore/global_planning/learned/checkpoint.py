@@ -16,6 +16,8 @@ from mrexplore.types import MrExploreError
 
 __all__ = ["save_policy", "load_policy", "default_policy_path", "file_sha256", "code_version", "LoadedPolicy"]
 
+MAX_POLICY_BYTES = 64 << 20
+"""Largest policy file read (the shipped one is 0.3 MB): a bigger file is refused before torch sees it."""
 VALUE_INPUTS = 4
 """Privileged scalars of the critic: remaining explorable area (m^2 / 100), coverage, steps / 1000, robots / 10."""
 
@@ -78,6 +80,10 @@ def load_policy(path: Path | None = None) -> LoadedPolicy:
     path = Path(path) if path is not None else default_policy_path()
     if not path.is_file():
         raise MrExploreError(f"policy file {path} not found; pass a file written by 'mrexplore train' with --policy")
+    if path.stat().st_size > MAX_POLICY_BYTES:
+        raise MrExploreError(
+            f"policy file {path} is {path.stat().st_size} bytes, over the {MAX_POLICY_BYTES}-byte limit of a policy"
+        )
     try:
         blob = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # noqa: BLE001 - torch raises many kinds for a file that is not a checkpoint
@@ -86,12 +92,19 @@ def load_policy(path: Path | None = None) -> LoadedPolicy:
         ) from None
     if not isinstance(blob, dict) or blob.get("format") != "mrexplore-policy-1":
         raise MrExploreError(f"policy file {path} is not a mrexplore policy (no format tag); retrain it")
-    cfg = config_from_dict(LearnedConfig, blob["learned_config"])
-    net = MultiGraphNet(cfg, int(blob["value_inputs"]))
     try:
-        net.load_state_dict(blob["state_dict"])
-    except RuntimeError as exc:
-        first = str(exc).splitlines()[0]
+        cfg = config_from_dict(LearnedConfig, blob["learned_config"])
+        value_inputs = int(blob["value_inputs"])
+        if value_inputs != VALUE_INPUTS:
+            raise MrExploreError(f"the critic reads {value_inputs} scalars, this version {VALUE_INPUTS}")
+        net = MultiGraphNet(cfg, value_inputs)
+        state = blob["state_dict"]
+        bad = [k for k, v in state.items() if not isinstance(v, torch.Tensor) or not torch.isfinite(v).all()]
+        if bad:
+            raise MrExploreError(f"weights {bad[0]} hold NaN or infinite values (or are no tensor)")
+        net.load_state_dict(state)
+    except (KeyError, TypeError, ValueError, AttributeError, RuntimeError, MrExploreError) as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise MrExploreError(f"policy file {path} does not fit this network ({first}); retrain it") from None
     net.eval()
     meta = {k: blob[k] for k in ("code_version", "meta", "learned_config")}

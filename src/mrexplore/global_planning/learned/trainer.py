@@ -12,14 +12,13 @@ import csv
 import functools
 import io
 import math
-import multiprocessing
 import os
 import shutil
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -51,6 +50,7 @@ from mrexplore.mission import Mission
 from mrexplore.strategies import ExplorationPipeline, make_strategy
 from mrexplore.threads import THREADS_ENV
 from mrexplore.types import MrExploreError
+from mrexplore.workers import stop_pool, worker_pool
 
 __all__ = ["train", "validate_policy", "TrainResult", "split_maps", "LOG_COLUMNS"]
 
@@ -98,6 +98,11 @@ class _Job:
     index: int = 0
     """Position in its batch: results are put back in this order, so a run does not depend on which
     worker finished first."""
+    sim: SimConfig | None = None
+    """Sensor, motion and reward of the episode (None: defaults); the team size is ``robots``."""
+    mission: MissionConfig | None = None
+    """Replanning and faults of the episode (None: defaults); the budget is ``cfg.max_steps`` and
+    failures of robots beyond the team are left out."""
 
 
 def _weights(net: MultiGraphNet) -> bytes:
@@ -125,8 +130,11 @@ def _pipeline(planner: LearnedPlanner | None) -> ExplorationPipeline:
 
 def _mission(job: _Job, pipeline: ExplorationPipeline) -> Mission:
     truth = _map(job.map_spec, job.cfg.resolution_m)
-    cfg = MissionConfig(max_steps=job.cfg.max_steps)
-    return Mission(truth, pipeline, SimConfig(robots=job.robots), cfg, seed=job.seed, progress=False)
+    base = job.mission or MissionConfig()
+    failures = tuple(f for f in base.faults.robot_failures if f[0] < job.robots)
+    cfg = replace(base, max_steps=job.cfg.max_steps, faults=replace(base.faults, robot_failures=failures))
+    sim = replace(job.sim or SimConfig(), robots=job.robots)
+    return Mission(truth, pipeline, sim, cfg, seed=job.seed, progress=False)
 
 
 def _episode_stats(m: Mission, decisions: int) -> dict[str, float]:
@@ -250,14 +258,15 @@ class _Runner:
             env = {"env_vars": {THREADS_ENV: "1", "OMP_NUM_THREADS": "1"}}
             self._remote = ray.remote(num_cpus=1, runtime_env=env)(_run_job)
         elif self.workers > 1:
-            self._pool = ProcessPoolExecutor(
-                max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init_worker
-            )
+            self._pool = worker_pool(self.workers, _init_worker)
         return self
 
-    def __exit__(self, *exc: object) -> None:
+    def __exit__(self, exc_type: type[BaseException] | None, *exc: object) -> None:
         if self._pool is not None:
-            self._pool.shutdown(cancel_futures=True)
+            if exc_type is None:
+                self._pool.shutdown(cancel_futures=True)
+            else:
+                stop_pool(self._pool)  # interrupted: what finished is saved; do not wait for the rest
         if self._ray_started:
             import ray
 
@@ -550,9 +559,17 @@ def train(
     seed: int = 0,
     progress: bool | None = None,
     say: Callable[[str], None] = lambda s: None,
+    sim: SimConfig | None = None,
+    mission: MissionConfig | None = None,
 ) -> TrainResult:
     """Train the learned global layer into ``out`` (``policy.pt``, ``best.pt``, ``state.pt``, ``log.csv``,
-    ``stages.csv``, ``curve.png``). ``minutes`` and ``episodes`` bound the run (the later stages are skipped)."""
+    ``stages.csv``, ``curve.png``). ``minutes`` and ``episodes`` bound the run (the later stages are skipped).
+    ``sim`` and ``mission`` set the episodes' sensor, motion, replanning and faults (None: defaults)."""
+    env = {"sim": config_to_dict(sim or SimConfig()), "mission": config_to_dict(mission or MissionConfig())}
+
+    def placed(jobs: list[_Job]) -> list[_Job]:
+        return [replace(j, sim=sim, mission=mission) for j in jobs]
+
     out = Path(out)
     state_path = out / "state.pt"
     if state_path.exists() and not resume:
@@ -568,7 +585,7 @@ def train(
     rng = np.random.default_rng(seed)
     if resume:
         blob = torch.load(state_path, weights_only=True)
-        if blob["config"] != config_to_dict(cfg):
+        if blob["config"] != config_to_dict(cfg) or blob.get("env", env) != env:
             raise MrExploreError(
                 f"{out} was trained with another config; resume with the same --config, or a new --out"
             )
@@ -594,7 +611,7 @@ def train(
             return n if episodes is None else max(0, min(n, episodes - st.episodes))
 
         def validate(weights: bytes | None) -> tuple[float, float]:
-            jobs = [_Job("eval", m, 3, i, weights, cfg) for i, m in enumerate(val_maps)]
+            jobs = placed([_Job("eval", m, 3, i, weights, cfg) for i, m in enumerate(val_maps)])
             res = list(runner.run(jobs, math.inf))
             return float(np.mean([r["steps"] for r in res])), float(np.mean([r["coverage"] for r in res]))
 
@@ -612,7 +629,9 @@ def train(
                 pass
             elif stage.startswith("dagger"):
                 # collect: the student drives, the expert labels its decisions
-                jobs = _episode_jobs("expert", budget_left(cfg.episodes_per_round), train_maps, cfg, rng, _weights(net))
+                jobs = placed(
+                    _episode_jobs("expert", budget_left(cfg.episodes_per_round), train_maps, cfg, rng, _weights(net))
+                )
                 results = runner.results(jobs, deadline)
                 new = [lab for r in results for lab in r["labels"]]
                 data += new
@@ -628,7 +647,7 @@ def train(
                         g["lr"] = cfg.lr
                     row["loss"], row["expert_agreement"] = _fit_imitation(net, opt, data, cfg, rng)
             else:
-                jobs = _episode_jobs("ppo", budget_left(cfg.ppo_episodes), train_maps, cfg, rng, _weights(net))
+                jobs = placed(_episode_jobs("ppo", budget_left(cfg.ppo_episodes), train_maps, cfg, rng, _weights(net)))
                 results = runner.results(jobs, deadline)
                 st.episodes += len(results)
                 row |= _collect_row(results) | {
@@ -677,7 +696,7 @@ def train(
             st.stage += 1
             st.elapsed_s = time.perf_counter() - t_start
             blob = {
-                "config": config_to_dict(cfg), "net": net.state_dict(), "opt": opt.state_dict(),
+                "config": config_to_dict(cfg), "env": env, "net": net.state_dict(), "opt": opt.state_dict(),
                 "state": st.__dict__, "data": _labels_to_blob(data), "rng": rng.bit_generator.state,
                 "code_version": code_version(),
             }  # fmt: skip
