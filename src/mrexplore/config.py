@@ -377,6 +377,16 @@ class MissionConfig(_Checked):
     transmission: str = "delta"
     """What the centre rebuilds its grid from: ``delta`` (changes since the last acknowledged sparse
     frontier map) or ``full`` (the whole sparse map every round, the paper's). Same grid, fewer bytes."""
+    oscillation_radius_m: float = 2.0
+    """A new goal within this distance of a goal the robot gave up before reaching it (still a frontier)
+    is a return to it, metres, > 0."""
+    oscillation_returns: int = 2
+    """After this many returns without reaching a goal, the robot commits: it keeps its current goal until
+    it reaches it, sees it resolved, or is blocked, whatever later decisions say, >= 1."""
+    stall_steps: int = 150
+    """Progress watchdog: a robot that gained no new area for this many steps beyond the time its path to
+    the goal needed drops that goal, and the cells within ``oscillation_radius_m`` / 4 of it stop being
+    candidates, steps, >= 1."""
 
     faults: FaultConfig = field(default_factory=FaultConfig)
 
@@ -385,6 +395,9 @@ class MissionConfig(_Checked):
         _require(self.replan_every_steps >= 1, "replan_every_steps", ">= 1", self.replan_every_steps)
         _require(self.min_replan_steps >= 1, "min_replan_steps", ">= 1", self.min_replan_steps)
         _require(self.transmission in ("delta", "full"), "transmission", "'delta' or 'full'", self.transmission)
+        _require(self.oscillation_radius_m > 0, "oscillation_radius_m", "> 0 metres", self.oscillation_radius_m)
+        _require(self.oscillation_returns >= 1, "oscillation_returns", ">= 1", self.oscillation_returns)
+        _require(self.stall_steps >= 1, "stall_steps", ">= 1", self.stall_steps)
 
 
 @dataclass(frozen=True)

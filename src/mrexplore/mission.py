@@ -21,6 +21,7 @@ messages and of their acknowledgements is simulated by the link (:class:`TeamLin
 from __future__ import annotations
 
 import copy
+import math
 import sys
 import time
 from collections.abc import Callable
@@ -166,6 +167,19 @@ class Mission:
         self._range_cells = None if faults.comm_range_m is None else faults.comm_range_m / truth.resolution_m
         self._active = np.arange(n)
         """Robots of the pending decision (those the centre assigns to), in robot order."""
+        # Oscillation breaking and the progress watchdog (module docstring).
+        self._abandoned: list[list[NDArray[np.int32]]] = [[] for _ in range(n)]
+        self._returns = np.zeros(n, dtype=np.int64)
+        self.committed = np.zeros(n, dtype=bool)
+        """``(n_robots,) bool``: the robot returned to goals it gave up too often and now keeps its goal."""
+        self._goal_due = np.zeros(n, dtype=np.int64)
+        """Step by which the robot should have reached its goal (assignment + path length / step)."""
+        self._last_gain = np.zeros(n, dtype=np.int64)
+        self._known_before = sim.robot_known_cells.copy()
+        self.oscillations = 0
+        """Times a robot was committed to its goal because it kept returning to goals it gave up."""
+        self.stalls = 0
+        """Goals the progress watchdog dropped."""
         self.state = np.full(truth.shape, CellState.UNKNOWN, dtype=np.uint8)  # until the first round
         self.done_reason: str | None = None
         show = sys.stderr.isatty() if progress is None else progress
@@ -215,6 +229,7 @@ class Mission:
             if len(path):
                 self.goals[i] = target
                 sim.set_path(i, path)
+                self._set_due(i, path)
                 return True
         return False
 
@@ -233,6 +248,10 @@ class Mission:
                 continue
             if goals[i, 0] < 0:
                 continue
+            if sim.steps - max(int(self._goal_due[i]), int(self._last_gain[i])) > cfg.stall_steps:
+                self._drop_stalled(i)
+                need = True
+                continue
             reached = sim.at_path_end(i)
             if (
                 frontier_goals
@@ -242,8 +261,10 @@ class Mission:
             ):
                 self.blacklist[goals[i, 0], goals[i, 1]] = True  # stood on it and it stayed a frontier
             if self.blocked[i] or sim.path_ahead_blocked(i):
+                self._release(i)
                 need = True
             elif reached:
+                self._release(i)
                 need |= not self._advance_route(i)
             elif (
                 frontier_goals
@@ -251,8 +272,48 @@ class Mission:
                 and not _goal_still_frontier(sim.team_observed, goals[i])
             ):
                 # Driving on towards a goal already seen costs little; a decision costs the whole team.
+                self._release(i)
                 need |= not self._advance_route(i)
         return need
+
+    def _release(self, i: int) -> None:
+        """Robot i's goal came to an end (reached, resolved, blocked): it is free again."""
+        self.committed[i] = False
+        self._returns[i] = 0
+        self._abandoned[i].clear()
+
+    def _drop_stalled(self, i: int) -> None:
+        """The watchdog: robot i gained nothing long after it should have reached its goal; the goal's
+        neighbourhood stops being a candidate and the robot waits for the next decision."""
+        r = max(1, round(self.mission_cfg.oscillation_radius_m / 4 / self.truth.resolution_m))
+        g = self.goals[i]
+        self.blacklist[max(0, g[0] - r) : g[0] + r + 1, max(0, g[1] - r) : g[1] + r + 1] = True
+        self.goals[i] = NO_GOAL
+        self.routes[i] = _NO_ROUTE
+        self.sim.set_path(i, _NO_ROUTE)
+        self._release(i)
+        self.stalls += 1
+
+    def _keeps_goal(self, i: int, goal: NDArray[np.int32]) -> bool:
+        """Whether robot i keeps its current goal instead of ``goal`` (oscillation breaking): it does when
+        committed, and commits when ``goal`` returns it to a goal it gave up for the
+        ``oscillation_returns``-th time. Records the goal given up otherwise."""
+        cur = self.goals[i]
+        if cur[0] < 0 or np.array_equal(cur, goal) or self.sim.at_path_end(i):
+            return False
+        if self.strategy.goals_are_frontiers and not _goal_still_frontier(self.sim.team_observed, cur):
+            return False
+        if self.committed[i]:
+            return True
+        radius_cells = self.mission_cfg.oscillation_radius_m / self.truth.resolution_m
+        if goal[0] >= 0 and any(np.hypot(*(goal - a)) <= radius_cells for a in self._abandoned[i]):
+            self._returns[i] += 1
+            if self._returns[i] >= self.mission_cfg.oscillation_returns:
+                self.committed[i] = True
+                self.oscillations += 1
+                return True
+        self._abandoned[i] = [*self._abandoned[i][-(_ABANDONED_KEPT - 1) :], cur.copy()]
+        return False
 
     def _in_range(self) -> NDArray[np.bool_]:
         """``(n_robots,) bool`` robots within radio range of the relay (all without a range limit)."""
@@ -292,6 +353,7 @@ class Mission:
         self.goals[i] = path[-1] if len(path) else NO_GOAL
         self.routes[i] = _NO_ROUTE
         sim.set_path(i, path)
+        self._set_due(i, path)
 
     def step(self) -> StepResult:
         """One simulation step (no replanning check): fail robots due to fail, drive, scan, record."""
@@ -299,6 +361,9 @@ class Mission:
             self.sim.fail(self._failures.pop(0)[1])
         result = self.sim.step()
         self.blocked = result.blocked
+        gained = self.sim.robot_known_cells > self._known_before
+        self._last_gain[gained] = self.sim.steps
+        self._known_before = self.sim.robot_known_cells.copy()
         self.curve.append(self.sim.coverage)
         r = self.sim_cfg.reward
         new_m2 = result.new_known_cells * self.truth.resolution_m**2
@@ -446,6 +511,8 @@ class Mission:
                 continue  # failed, or out of range: the assignment never arrives
             path = decision.paths[i]
             goal = decision.goals_rc[i]
+            if self._keeps_goal(i, goal):
+                continue  # committed: drives on to its goal, whatever this decision says
             if len(path) and not np.array_equal(path[0], self.sim.positions_rc[i]):
                 # Planned from the cell of the robot's last message that arrived; it is elsewhere now.
                 here = _cell_mask(self.passable.shape, self.sim.positions_rc[i])
@@ -453,7 +520,13 @@ class Mission:
             self.sim.set_path(i, path)
             self.routes[i] = decision.routes[i][1:]
             self.goals[i] = goal if len(path) else NO_GOAL
+            self._set_due(i, path)
         self._just_decided = True
+
+    def _set_due(self, i: int, path: NDArray[np.int32]) -> None:
+        """Robot i should reach the end of ``path`` by now plus its length at ``step_m`` per step."""
+        steps_needed = _path_len_cells(path) / (self.sim_cfg.motion.step_m / self.truth.resolution_m)
+        self._goal_due[i] = self.sim.steps + math.ceil(steps_needed)
 
     def run(self) -> MissionResult:
         """Run to the end with the strategy's own decisions."""
@@ -480,8 +553,18 @@ class Mission:
 
 
 _NO_ROUTE = np.zeros((0, 2), dtype=np.int32)
+_ABANDONED_KEPT = 4
+"""Goals given up that a robot remembers for oscillation breaking."""
 _LINK_STREAM = 0x4C494E4B
 """Second word of the seed of the link's generator (lost messages), apart from the mission's."""
+
+
+def _path_len_cells(path: NDArray[np.int32]) -> float:
+    """Length of an 8-connected cell path, cells (diagonal steps sqrt(2))."""
+    if len(path) < 2:
+        return 0.0
+    d = np.abs(np.diff(path, axis=0))
+    return float(np.where((d[:, 0] > 0) & (d[:, 1] > 0), math.sqrt(2.0), 1.0).sum())
 
 
 def _cell_mask(shape: tuple[int, int], rc: NDArray[np.integer]) -> NDArray[np.bool_]:

@@ -165,20 +165,26 @@ def _yaml_image_name(path: Path) -> str | None:
 
 def _open_image(path: Path, cfg: MapConfig, pixel_m: float | None = None) -> Image.Image:
     """Decode an image once its header passed the pixel limit (and, given ``pixel_m``, the cell limit)."""
+    if not path.is_file():
+        raise MrExploreError(f"map image {path} not found; fix the path in the map YAML")
     try:
-        if not path.is_file():
-            raise MrExploreError(f"map image {path} not found; fix the path in the map YAML")
         with warnings.catch_warnings():
             warnings.simplefilter("error", Image.DecompressionBombWarning)
             img = Image.open(path)
-            _check_pixels(str(path), img.width, img.height, cfg)
-            if pixel_m is not None:
-                _check_cells(str(path), (img.height, img.width), pixel_m, cfg)
-            img.load()
+            size = (img.width, img.height)
     except (OSError, UnidentifiedImageError, ValueError, SyntaxError, Image.DecompressionBombWarning) as exc:
         raise MrExploreError(f"cannot read map image {path}: {exc}; give a PNG/PGM map image") from None
     except Image.DecompressionBombError:
         raise MrExploreError(f"map image {path} is larger than any map should be; give a real map image") from None
+    _check_pixels(str(path), size[0], size[1], cfg)
+    if pixel_m is not None:
+        _check_cells(str(path), (size[1], size[0]), pixel_m, cfg)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            img.load()
+    except (OSError, ValueError, SyntaxError, Image.DecompressionBombWarning) as exc:
+        raise MrExploreError(f"cannot read map image {path}: {exc}; give a PNG/PGM map image") from None
     return img
 
 
@@ -195,7 +201,9 @@ def _load_ros_yaml(path: Path, cfg: MapConfig) -> GroundTruthMap:
     except (TypeError, ValueError, OverflowError) as exc:
         raise MrExploreError(f"malformed map YAML {path}: {exc}; fix the numeric fields") from None
     if not (math.isfinite(resolution) and resolution > 0) or len(origin) < 2:
-        raise MrExploreError(f"malformed map YAML {path}: resolution must be > 0 and origin [x, y, yaw]")
+        raise MrExploreError(
+            f"malformed map YAML {path}: resolution must be a finite number > 0 and origin [x, y, yaw]"
+        )
     if not all(math.isfinite(v) and abs(v) <= _MAX_COORD_M for v in origin) or not math.isfinite(free_th):
         raise MrExploreError(
             f"malformed map YAML {path}: origin and free_thresh must be finite numbers, origin within "
@@ -247,8 +255,12 @@ def _load_houseexpo_json(path: Path, cfg: MapConfig) -> GroundTruthMap:
     try:
         data = json.loads(path.read_text())
         verts = np.asarray(data["verts"], dtype=np.float64)
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError, RecursionError) as exc:
-        reason = str(exc).splitlines()[0][:80] if str(exc) else ""
+    except RecursionError:
+        raise MrExploreError(
+            f"malformed HouseExpo JSON {path}: nested too deeply; give a file with a 'verts' polygon"
+        ) from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else ""
         raise MrExploreError(
             f"malformed HouseExpo JSON {path}: {type(exc).__name__} {reason}; give a file with a 'verts' polygon"
         ) from None

@@ -1,0 +1,156 @@
+"""Progress, always: over 210 seeded episodes no stretch of steps without new area outlasts what travel and
+the watchdog explain while a frontier remains; oscillation breaking and the watchdog by hand."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from conftest import SHARED_MAPS, truth_map
+
+from mrexplore.config import MapConfig, MissionConfig, SensorConfig, SimConfig
+from mrexplore.maps.loaders import load_map
+from mrexplore.mission import Mission
+from mrexplore.paths.astar import astar_path
+from mrexplore.paths.distance_field import distance_field
+from mrexplore.strategies import make_strategy, strategy_names
+from mrexplore.types import CellState
+
+TEAMS = (1, 2, 3, 5, 8)
+MAPS = ("generated:11", "generated:12", "generated:13", "generated:14", "generated:15")
+DEV_MAPS = (
+    "houseexpo/json/0004d52d1aeeb8ae6de39d6bd993e992.json",
+    "houseexpo/json/0a1b29dba355df2ab02630133187bfab.json",
+)
+RESOLUTION_M = 0.2
+
+
+def longest_flat(curve: np.ndarray) -> int:
+    """The longest run of steps that brought no new area, in a coverage curve (index = step).
+
+    >>> longest_flat(np.array([0.1, 0.2, 0.2, 0.2, 0.5, 0.5]))  # steps 2 and 3
+    2
+    """
+    flat = np.diff(curve) <= 0
+    best = run = 0
+    for f in flat:
+        run = run + 1 if f else 0
+        best = max(best, run)
+    return best
+
+
+def travel_bound_steps(truth, starts_rc: np.ndarray, cfg: SimConfig) -> int:
+    """Steps to drive twice across the explorable free space (twice the largest geodesic distance from the
+    first start, an upper bound on the diameter), at ``step_m`` a step."""
+    field = distance_field(~truth.occupied, tuple(starts_rc[0]))
+    reach = float(field[np.isfinite(field)].max()) * truth.resolution_m
+    return math.ceil(2 * 2 * reach / cfg.motion.step_m)
+
+
+def _episodes() -> list[tuple[str, str, int, float]]:
+    maps = list(MAPS) + ([str(SHARED_MAPS / m) for m in DEV_MAPS] if SHARED_MAPS.is_dir() else [])
+    out = []
+    for m in maps:
+        for strategy in strategy_names():
+            for n in TEAMS:
+                out.append((m, strategy, n, 8.0 if n == 1 else 6.0))  # lone robots with the 8 m sensor
+    return out
+
+
+EPISODES = _episodes()
+
+
+@pytest.fixture(scope="module")
+def maps():
+    return {m: load_map(m, MapConfig(resolution_m=RESOLUTION_M)) for m in {e[0] for e in EPISODES}}
+
+
+def test_at_least_two_hundred_episodes() -> None:
+    assert len(EPISODES) >= 150 + (60 if SHARED_MAPS.is_dir() else 0)
+
+
+@pytest.mark.parametrize(("map_spec", "strategy", "robots", "range_m"), EPISODES)
+def test_no_stretch_without_new_area_beyond_travel_and_watchdog(maps, map_spec, strategy, robots, range_m) -> None:
+    truth = maps[map_spec]
+    sim_cfg = SimConfig(robots=robots, sensor=SensorConfig(range_m=range_m))
+    cfg = MissionConfig(max_steps=6000)
+    mission = Mission(truth, make_strategy(strategy), sim_cfg, cfg, seed=robots, progress=False)
+    result = mission.run()
+    m = result.measures
+    assert m.done_reason != "max_steps", f"{strategy} never ended ({m.steps} steps, coverage {m.coverage:.3f})"
+    flat = longest_flat(result.coverage_curve)
+    bound = cfg.stall_steps + travel_bound_steps(truth, result.starts_rc, sim_cfg)
+    assert flat <= bound, f"{flat} steps without new area (bound {bound})"
+    assert m.coverage >= 0.95 or strategy == "oracle"
+
+
+def test_a_robot_returning_to_goals_it_gave_up_commits_to_its_goal() -> None:
+    """A corridor with frontiers at both ends; a planner that flips the robot's goal from one end to the
+    other at every decision. After ``oscillation_returns`` returns the robot keeps its goal and the
+    mission ends; without the breaker it would flip until the budget ran out."""
+    corridor = truth_map(
+        """
+        ##############################################
+        #............................................#
+        #............................................#
+        ##############################################
+        """,
+        resolution_m=0.2,
+    )
+    strategy = make_strategy("nearest")
+    decide = strategy.decide
+    calls = [0]
+
+    def flipping(state, robots_rc, resolution_m, blacklist=None, current=None, rng=None):
+        """Each decision sends the robot to the frontier at the end it is not heading for."""
+        d = decide(state, robots_rc, resolution_m, blacklist, current, rng)
+        if d.done_reason is not None:
+            return d
+        calls[0] += 1
+        un = d.frontiers.un_rc
+        goal = un[np.argmin(un[:, 1])] if calls[0] % 2 else un[np.argmax(un[:, 1])]
+        path = astar_path(d.state == CellState.FREE, tuple(robots_rc[0]), tuple(goal))
+        return replace(d, goals_rc=goal[None].astype(np.int32), routes=[goal[None]], paths=[path])
+
+    strategy.decide = flipping  # type: ignore[method-assign]
+    cfg = MissionConfig(max_steps=2000, replan_every_steps=5, min_replan_steps=5)
+    sim = SimConfig(robots=1, sensor=SensorConfig(range_m=1.0))
+    mission = Mission(corridor, strategy, sim, cfg, seed=0, starts_rc=np.array([[1, 22]]), progress=False)
+    result = mission.run()
+    assert mission.oscillations >= 1
+    assert result.measures.done_reason == "no_frontiers" and result.measures.coverage > 0.95
+    assert result.measures.steps < 400  # 8.8 m of corridor: one way, back, a few flips
+    assert calls[0] > 2 * cfg.oscillation_returns
+    # Without the breaker the same planner flips the robot until the budget runs out.
+    endless = Mission(
+        corridor, strategy, sim, replace(cfg, oscillation_returns=10**6), seed=0, starts_rc=np.array([[1, 22]])
+    )
+    assert endless.run().measures.done_reason == "max_steps"
+
+
+def test_the_watchdog_drops_a_goal_that_brings_nothing() -> None:
+    """A goal the robot can never reach (its path is cleared every step, as if the robot were stuck):
+    after its due time plus ``stall_steps`` without new area, the goal is dropped and blacklisted."""
+    room = truth_map(
+        """
+        ############
+        #..........#
+        #..........#
+        ############
+        """,
+        resolution_m=0.2,
+    )
+    cfg = MissionConfig(max_steps=400, stall_steps=30)
+    mission = Mission(room, make_strategy("nearest"), SimConfig(robots=1), cfg, seed=0, progress=False)
+    assert mission.advance()
+    mission.decide()
+    mission.goals[0] = np.array([1, 10], np.int32)  # a goal it keeps but never drives to
+    mission.sim.set_path(0, np.zeros((0, 2), np.int32))
+    mission.sim.paths[0] = np.array([mission.sim.positions_rc[0], mission.sim.positions_rc[0]])
+    for _ in range(60):
+        mission.step()
+        mission._needs_decision()  # noqa: SLF001 - the watchdog runs where replanning is checked
+    assert mission.stalls == 1 and mission.goals[0].tolist() == [-1, -1]
+    assert mission.blacklist[1, 10]
