@@ -18,6 +18,7 @@ from mrexplore.bench.runner import (
     EpisodeSpec,
     _area_hint,
     dataset_of,
+    drop_partial_tail,
     expand_maps,
     parse_curve,
     read_rows,
@@ -25,7 +26,7 @@ from mrexplore.bench.runner import (
     size_class,
 )
 from mrexplore.cli import main
-from mrexplore.config import MapConfig, MissionConfig, RunConfig
+from mrexplore.config import FaultConfig, MapConfig, MissionConfig, RunConfig
 from mrexplore.types import MrExploreError
 
 FAST = dict(run=RunConfig(map=MapConfig(resolution_m=0.2), mission=MissionConfig(max_steps=3000)))
@@ -176,3 +177,82 @@ def test_bench_refuses_unknown_strategy(tmp_path, capsys) -> None:
         capsys.readouterr().err == "mrexplore: error: unknown strategy 'coscan2'; choose one of "
         "hier, hier-heuristic, nearest, utility, coscan, oracle\n"
     )
+
+
+def test_a_half_written_last_row_is_dropped_and_its_episode_rerun(tmp_path) -> None:
+    specs = [EpisodeSpec("generated:1", "nearest", 2, seed, **FAST) for seed in (0, 1, 2)]
+    out = tmp_path / "results.csv"
+    assert run_bench(specs[:2], out, workers=1) == 2
+    text = out.read_bytes()
+    cut = text[: len(text) - 40]  # a kill in the middle of writing the second row
+    out.write_bytes(cut)
+    assert drop_partial_tail(out) == len(cut) - cut.rfind(b"\n") - 1
+    assert len(read_rows(out)) == 1
+    out.write_bytes(cut)
+    assert run_bench(specs, out, workers=1) == 2  # the cut episode again, and the new one
+    rows = read_rows(out)
+    assert sorted(int(r["seed"]) for r in rows) == [0, 1, 2]
+    assert out.read_bytes().count(b"\n") == 4 and out.read_bytes().endswith(b"\n")
+
+
+def test_other_settings_in_the_same_folder_are_refused(tmp_path) -> None:
+    out = tmp_path / "results.csv"
+    assert run_bench([EpisodeSpec("generated:1", "nearest", 2, 0, **FAST)], out, workers=1) == 1
+    other = RunConfig(map=MapConfig(resolution_m=0.25), mission=MissionConfig(max_steps=3000))
+    with pytest.raises(MrExploreError) as err:
+        run_bench([EpisodeSpec("generated:1", "nearest", 2, 0, run=other)], out, workers=1)
+    assert str(err.value) == (
+        f"{tmp_path} holds episodes run with other settings (map.resolution_m 0.2 there, 0.25 now); "
+        "pass a new --out folder, or rerun with the same settings"
+    )
+    assert (tmp_path / "settings.yaml").read_text().startswith("# settings of every episode in this folder")
+
+
+def test_the_resume_key_holds_the_resolved_map_and_the_settings(tmp_path, monkeypatch) -> None:
+    Image.fromarray(np.where(np.pad(np.ones((30, 30)), 5) > 0, 255, 0).astype(np.uint8)).save(tmp_path / "m.png")
+    monkeypatch.chdir(tmp_path)
+    a = EpisodeSpec("m.png", "nearest", 2, 0, **FAST)
+    b = EpisodeSpec(str(tmp_path / "m.png"), "nearest", 2, 0, **FAST)
+    assert a.key == b.key and a.map_resolved == str((tmp_path / "m.png").resolve())
+    faulty = RunConfig(map=FAST["run"].map, mission=MissionConfig(max_steps=3000, faults=FaultConfig(message_loss=0.1)))
+    assert EpisodeSpec("m.png", "nearest", 2, 0, run=faulty).settings != a.settings
+    assert EpisodeSpec("m.png", "hier", 2, 0, **FAST).policy_sha256 != "" and a.policy_sha256 == ""
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            out.append(int(stat.parent.name))
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="reads the process table from /proc (Linux)")
+def test_no_worker_outlives_a_killed_parent(tmp_path) -> None:
+    cmd = [sys.executable, "-m", "mrexplore", "bench", "--maps", "generated:1", "generated:2", "generated:3"]
+    cmd += ["--strategies", "nearest,utility", "--seeds", "3", "--resolution", "0.1", "--workers", "2"]
+    proc = subprocess.Popen([*cmd, "--out", str(tmp_path)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    workers: list[int] = []
+    while time.time() < deadline and len(workers) < 2:
+        time.sleep(0.2)
+        workers = _children(proc.pid)
+    assert len(workers) >= 2, "the bench never started its workers"
+    proc.send_signal(signal.SIGKILL)  # no chance to clean up
+    proc.wait()
+    deadline = time.time() + 10
+    while time.time() < deadline and any(_alive(w) for w in workers):
+        time.sleep(0.2)
+    assert not any(_alive(w) for w in workers)
