@@ -221,3 +221,27 @@ def test_centre_refuses_a_delta_on_a_base_it_lacks() -> None:
     assert not centre.accepts(delta)  # holds round 4, the delta is on 3
     with pytest.raises(MrExploreError, match="applies to round 3, the centre holds round 4"):
         centre.receive(delta)
+
+
+def test_gif_frames_draw_failed_and_unheard_robots() -> None:
+    from mrexplore.render import render_frame
+
+    occ = np.zeros((20, 20), bool)
+    state = np.full((20, 20), CellState.FREE, np.uint8)
+    pos = np.array([[5, 5], [5, 14], [14, 10]])
+    none = np.tile([-1, -1], (3, 1))
+    img = render_frame(
+        occ,
+        state,
+        pos,
+        [],
+        None,
+        none,
+        scale=10.0,
+        failed=np.array([False, True, False]),
+        unheard=np.array([False, False, True]),
+    )
+    px = np.asarray(img)
+    assert tuple(px[55, 55]) == (220, 50, 47)  # robot 0 filled in its colour
+    assert tuple(px[55, 155]) == (128, 128, 128)  # robot 1 failed: grey (crossed out through its centre)
+    assert tuple(px[145, 105]) == (255, 255, 255)  # robot 2 not heard: a ring, its centre unfilled

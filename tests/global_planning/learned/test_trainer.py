@@ -68,3 +68,24 @@ def test_validation_maps_are_held_out(tmp_path: Path) -> None:
     assert len(train_maps) == 37 and not set(train_maps) & set(val)
     assert val[:3] == [str(folder / f"train_{i:03d}.png") for i in (37, 38, 39)]
     assert val[3:] == ["generated:1000000", "generated:1000001", "generated:1000002"]
+
+
+def test_training_episodes_take_the_run_settings_and_keep_faults_inside_the_team() -> None:
+    from mrexplore.config import FaultConfig, MissionConfig, SensorConfig, SimConfig
+    from mrexplore.global_planning.learned.trainer import _Job, _mission, _pipeline
+
+    faults = FaultConfig(robot_failures=((0, 50), (3, 20)), message_loss=0.2)
+    job = _Job(
+        "eval",
+        "generated:2",
+        2,
+        0,
+        None,
+        TrainConfig(resolution_m=0.2, max_steps=77),
+        sim=SimConfig(sensor=SensorConfig(range_m=4.0)),
+        mission=MissionConfig(faults=faults),
+    )
+    m = _mission(job, _pipeline(None))
+    assert m.mission_cfg.max_steps == 77 and m.sim_cfg.robots == 2 and m.sim_cfg.sensor.range_m == 4.0
+    assert m.mission_cfg.faults.robot_failures == ((0, 50),)  # robot 3 is not in a team of 2
+    assert m.mission_cfg.faults.message_loss == 0.2
