@@ -51,10 +51,16 @@ def test_budget_cut_episodes_counted_and_tables_by_dataset() -> None:
 
 def test_bytes_table_reductions() -> None:
     line = bytes_table([row("hier", 10), row("hier", 10, bytes_sparse="2000")]).splitlines()[2]
-    # grid 10 kB, zlib 2 kB, sparse 3 kB mean, delta 0.5 kB: 70 % and 95 % below the grid, 75 % below zlib.
-    assert (
-        line == "| houseexpo small | 2 | 10.0 | 2.0 | 3.0 | 0.5 | 70.00% ↓ | 95.00% ↓ | 75.00% ↓ | 0.9900 | 0.99900 |"
+    # grid 10 kB, zlib 2 kB, sparse 3 kB mean, delta 0.5 kB: 70 % and 95 % below the grid, 75 % below zlib;
+    # rows from before the grid-delta competitor was counted show '–' there.
+    assert line == (
+        "| houseexpo small | 2 | 10.0 | 2.0 | – | 3.0 | 0.5 | 70.00% ↓ | 95.00% ↓ | 75.00% ↓ | – | 0.9900 | 0.99900 |"
     )
+    rows = [row("hier", 10, bytes_grid_delta_zlib="400"), row("hier", 10, bytes_grid_delta_zlib="600")]
+    line = bytes_table(rows).splitlines()[2]
+    # the grid's changed cells, zlib: 0.5 kB, as much as the sparse delta; 0.4 kB would be 25 % less (↑).
+    assert line.split(" | ")[4] == "0.5" and line.split(" | ")[10] == "0.00% ↓"
+    assert bytes_table([row("hier", 10, bytes_grid_delta_zlib="400")]).splitlines()[2].split(" | ")[10] == "25.00% ↑"
 
 
 def test_bound_ratio() -> None:

@@ -136,23 +136,30 @@ def _groups(rows: list[Row]) -> list[tuple[str, str]]:
 
 def bytes_table(rows: list[Row]) -> str:
     """Table II: per dataset and size class, mean kB sent per episode by each encoding, the reduction
-    against the raw grid, and the centre map's free-space IoU (lowest round, mean over rounds)."""
+    against the raw grid, the sparse delta against its generic competitor (the grid's changed cells since
+    the last acknowledged round, zlib; '–' for rows written before it was counted), and the centre map's
+    free-space IoU (lowest round, mean over rounds)."""
     lines = [
-        "| scene | episodes | grid kB | grid zlib kB | sparse kB | sparse delta kB | sparse vs grid | "
-        "delta vs grid | delta vs zlib | IoU min | IoU mean |",
-        "|" + " --- |" * 11,
+        "| scene | episodes | grid kB | grid zlib kB | grid delta zlib kB | sparse kB | sparse delta kB | "
+        "sparse vs grid | delta vs grid | delta vs zlib | delta vs grid delta zlib | IoU min | IoU mean |",
+        "|" + " --- |" * 13,
     ]
     for dataset, cls in _groups(rows):
         sel = [r for r in rows if r["dataset"] == dataset and r["size_class"] == cls]
         kb = {k: float(np.mean([float(r[k]) for r in sel])) / 1e3 for k in _BYTES}
+        known = [float(r["bytes_grid_delta_zlib"]) for r in sel if r.get("bytes_grid_delta_zlib")]
+        grid_delta = float(np.mean(known)) / 1e3 if len(known) == len(sel) else None
         iou_min = min(float(r["reconstruction_iou_min"]) for r in sel)
         iou_mean = np.mean([float(r["reconstruction_iou_mean"]) for r in sel])
         lines.append(
             f"| {dataset} {cls} | {len(sel)} | {kb['bytes_grid']:.1f} | {kb['bytes_grid_zlib']:.1f} | "
+            f"{'–' if grid_delta is None else f'{grid_delta:.1f}'} | "
             f"{kb['bytes_sparse']:.1f} | {kb['bytes_sparse_delta']:.1f} | "
             f"{_reduction(kb['bytes_sparse'], kb['bytes_grid'])} | "
             f"{_reduction(kb['bytes_sparse_delta'], kb['bytes_grid'])} | "
-            f"{_reduction(kb['bytes_sparse_delta'], kb['bytes_grid_zlib'])} | {iou_min:.4f} | {iou_mean:.5f} |"
+            f"{_reduction(kb['bytes_sparse_delta'], kb['bytes_grid_zlib'])} | "
+            f"{'–' if grid_delta is None else _reduction(kb['bytes_sparse_delta'], grid_delta)} | "
+            f"{iou_min:.4f} | {iou_mean:.5f} |"
         )
     return "\n".join(lines)
 
@@ -161,7 +168,11 @@ _BYTES = ("bytes_grid", "bytes_grid_zlib", "bytes_sparse", "bytes_sparse_delta")
 
 
 def _reduction(part: float, whole: float) -> str:
-    return f"{100 * (1 - part / whole):.2f}% ↓" if whole > 0 else "–"
+    """How much smaller ``part`` is than ``whole`` (↓), or larger (↑)."""
+    if whole <= 0:
+        return "–"
+    change = 100 * (1 - part / whole)
+    return f"{change:.2f}% ↓" if change >= 0 else f"{-change:.2f}% ↑"
 
 
 def bound_table(rows: list[Row], strategies: Sequence[str]) -> str:
