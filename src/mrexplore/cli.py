@@ -484,6 +484,15 @@ def _summary(rec: dict[str, Any]) -> str:
             f"  sent over {rec['rounds']} rounds: sparse {_kb(rec['bytes_sparse'])}, delta "
             f"{_kb(rec['bytes_sparse_delta'])}; grid {_kb(rec['bytes_grid'])}, zlib {_kb(rec['bytes_grid_zlib'])}; "
             f"centre map IoU min {rec['reconstruction_iou_min']:.4f}",
+            *(
+                [
+                    f"  faults: {rec['robots_failed']} robots failed, {rec['messages_lost']} of "
+                    f"{rec['messages_sent']} messages lost, {rec['messages_resent']} whole maps resent, "
+                    f"{rec['acks_lost']} acknowledgements lost, {rec['centre_restarts']} centre restarts"
+                ]
+                if any(rec[k] for k in ("robots_failed", "messages_lost", "messages_resent", "centre_restarts"))
+                else []
+            ),
         ]
     )
 
