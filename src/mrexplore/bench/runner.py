@@ -14,7 +14,6 @@ from __future__ import annotations
 import csv
 import functools
 import hashlib
-import io
 import json
 import os
 import sys
@@ -30,6 +29,7 @@ from PIL import Image
 from tqdm import tqdm
 
 from mrexplore.config import MapConfig, RunConfig, TrainConfig, config_to_dict
+from mrexplore.csv_append import append_row, drop_partial_tail
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.maps.loaders import is_generator_spec, load_map
 from mrexplore.mission import run_mission
@@ -227,45 +227,8 @@ def _check_columns(path: Path) -> None:
         )
 
 
-def drop_partial_tail(path: Path) -> int:
-    """Cut a last line that a kill left half-written (no newline at its end); returns bytes dropped."""
-    if not path.exists():
-        return 0
-    with open(path, "rb+") as f:
-        size = f.seek(0, os.SEEK_END)
-        if size == 0:
-            return 0
-        f.seek(size - 1)
-        if f.read(1) == b"\n":
-            return 0
-        f.seek(max(0, size - (1 << 20)))
-        tail = f.read()
-        keep = size - len(tail) + tail.rfind(b"\n") + 1 if b"\n" in tail else 0
-        f.truncate(keep)
-        os.fsync(f.fileno())
-        return size - keep
-
-
-def _line(row: dict[str, Any]) -> bytes:
-    buf = io.StringIO()
-    csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n").writerow(
-        {k: ("" if row[k] is None else row[k]) for k in COLUMNS}
-    )
-    return buf.getvalue().encode()
-
-
 def _append(path: Path, row: dict[str, Any]) -> None:
-    """Append one row with a single write of its whole line (the header first into a new file, atomically)."""
-    if not path.exists() or path.stat().st_size == 0:
-        tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text(",".join(COLUMNS) + "\n")
-        tmp.replace(path)
-    fd = os.open(path, os.O_WRONLY | os.O_APPEND)
-    try:
-        os.write(fd, _line(row))
-        os.fsync(fd)
-    finally:
-        os.close(fd)
+    append_row(path, COLUMNS, row)
 
 
 def _check_settings(folder: Path, specs: Sequence[EpisodeSpec], rows: list[dict[str, str]]) -> None:

@@ -43,6 +43,8 @@ def test_stop_and_resume_runs_every_stage_once(tmp_path: Path) -> None:
         train(TINY, out, None, workers=1)
     with pytest.raises(MrExploreError, match=r"was trained with another config; resume with the same --config"):
         train(TrainConfig(), out, None, workers=1, resume=True)
+    with open(out / "log.csv", "ab") as f:  # a kill after a stage's row, before its state; then a cut line
+        f.write(b"ppo0,9,9,9\nppo0,9,")
     second = train(TINY, out, None, workers=1, seed=3, resume=True)
     assert [r["stage"] for r in second.stages] == ["baseline", "dagger0", "ppo0"]
     log = _rows(out / "log.csv")

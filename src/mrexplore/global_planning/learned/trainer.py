@@ -27,6 +27,7 @@ import torch
 from tqdm import tqdm
 
 from mrexplore.config import MapConfig, MissionConfig, SimConfig, TrainConfig, config_to_dict
+from mrexplore.csv_append import append_row, drop_partial_tail, keep_rows
 from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS, code_version, save_policy
 from mrexplore.global_planning.learned.curve import plot_learning_curve
 from mrexplore.global_planning.learned.expert import (
@@ -456,6 +457,9 @@ class _State:
     best_val: float = math.inf
     best_stage: str = ""
     stage_rows: list[dict[str, Any]] = field(default_factory=list)
+    log_rows: int = -1
+    """Rows of log.csv when the state was saved (a resumed run drops later ones: it writes them again);
+    -1: not recorded (a state from before this field), keep every row."""
 
 
 @dataclass(frozen=True)
@@ -509,11 +513,13 @@ def _labels_from_blob(blob: Sequence[dict[str, torch.Tensor]]) -> list[ExpertLab
 class _Log:
     """CSV log (always) and TensorBoard (where the optional extra is installed)."""
 
-    def __init__(self, out: Path) -> None:
+    def __init__(self, out: Path, keep: int | None = None) -> None:
+        """``keep``: rows a resumed run keeps (those of the stages it saved); a cut last line goes too."""
         self.path = out / "log.csv"
-        if not self.path.exists():
-            with open(self.path, "w", newline="") as f:
-                csv.writer(f).writerow(LOG_COLUMNS)
+        drop_partial_tail(self.path)
+        if keep is not None:
+            keep_rows(self.path, keep)
+        self.rows = max(0, len(self.path.read_bytes().splitlines()) - 1) if self.path.exists() else 0
         try:
             from torch.utils.tensorboard import SummaryWriter
 
@@ -522,10 +528,8 @@ class _Log:
             self.tb = None
 
     def row(self, values: dict[str, Any], step: int) -> None:
-        with open(self.path, "a", newline="") as f:
-            csv.writer(f).writerow(["" if values.get(k) is None else values.get(k) for k in LOG_COLUMNS])
-            f.flush()
-            os.fsync(f.fileno())
+        append_row(self.path, LOG_COLUMNS, values)
+        self.rows += 1
         if self.tb is not None:
             for k, v in values.items():
                 if isinstance(v, (int, float)) and k != "time_s":
@@ -599,7 +603,7 @@ def train(
     train_maps, val_maps = split_maps(train_dir, cfg.val_maps)
     if not train_maps:
         say("no training DungeonMaps found; training on procedural floor plans only")
-    log = _Log(out)
+    log = _Log(out, st.log_rows if resume and st.log_rows >= 0 else None)
     t_start = time.perf_counter() - st.elapsed_s
     deadline = t_start + minutes * 60 if minutes is not None else math.inf
     stages = _stages(cfg)
@@ -695,6 +699,7 @@ def train(
             # checkpoint: everything a resume needs, written atomically
             st.stage += 1
             st.elapsed_s = time.perf_counter() - t_start
+            st.log_rows = log.rows
             blob = {
                 "config": config_to_dict(cfg), "env": env, "net": net.state_dict(), "opt": opt.state_dict(),
                 "state": st.__dict__, "data": _labels_to_blob(data), "rng": rng.bit_generator.state,
