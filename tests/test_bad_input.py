@@ -256,5 +256,16 @@ def test_hostile_policy_files(tmp_path, capsys) -> None:
         f"policy file {tmp_path / 'huge.pt'} does not fit this network (hidden must be in [4, 1024], got 1000000); "
         "retrain it"
     )
+    good = tmp_path / "good.pt"
+    save_policy(good, MultiGraphNet(LearnedConfig(), VALUE_INPUTS))
+    blob = torch.load(good, weights_only=True)
+    next(iter(blob["state_dict"].values())).view(-1)[0] += 0.5  # a changed weight, still finite
+    torch.save(blob, tmp_path / "changed.pt")
+    with pytest.raises(MrExploreError) as err:
+        load_policy(tmp_path / "changed.pt")
+    assert str(err.value) == (
+        f"policy file {tmp_path / 'changed.pt'} does not fit this network (weights do not match the digest saved "
+        "with them: the file is corrupted); retrain it"
+    )
     assert main(["explore", "--map", "generated:3", *FAST, "--policy", str(tmp_path / "huge.pt")]) == 2
     assert "does not fit this network" in _err(capsys)

@@ -79,10 +79,14 @@ class DecisionEnv:
         """Run to the next decision and pose it (None where the mission ends); the reward on the way."""
         m = self._require()
         self._problem = None
-        if not m.advance():
-            return m.reward_since_decision
-        reward = m.reward_since_decision  # read first: a pose that ends the mission resets it
-        self._problem = m.pose()
+        reward = 0.0
+        while self._problem is None:  # rounds where the centre heard no robot (faults) pose nothing
+            if not m.advance():
+                return m.reward_since_decision
+            reward = m.reward_since_decision  # read first: a pose that ends the mission resets it
+            self._problem = m.pose()
+            if m.done:
+                break
         return reward
 
     def _info(self) -> dict[str, Any]:

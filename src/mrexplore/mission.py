@@ -441,7 +441,8 @@ class Mission:
 
     def pose(self) -> AssignmentProblem | None:
         """First half of a decision: the centre's round and layer 1. Returns the problem a global planner
-        answers with :meth:`commit`, or None when the mission ended here (no frontier left or reachable)."""
+        answers with :meth:`commit`, or None when the mission ended here (no frontier left or reachable,
+        :attr:`done`) or, under faults, when the centre heard no robot in time (not done: advance on)."""
         t, args = self._round()
         if len(self._active) == 0:
             self.plan_ms.append(self._centre_ms(t))
@@ -492,9 +493,9 @@ class Mission:
         )
 
     def _idle_round(self) -> None:
-        """A round in which the centre could assign to nobody: no decision; the robots drive on."""
+        """A round in which the centre could assign to nobody: no decision (the reward since the last one
+        keeps accumulating); the robots drive on."""
         self.last_decision_step = self.sim.steps
-        self.reward_since_decision = 0.0
         self._just_decided = True
 
     def _apply(self, decision: Decision) -> None:

@@ -72,6 +72,8 @@ class RobotSender:
         self._acked_round = FULL
         self._acked_grid = np.full(shape, _ROS_VALUES[CellState.UNKNOWN], dtype=np.int8)
         self._sent_grid: tuple[tuple[slice, slice], NDArray[np.int8]] | None = None
+        self._unconfirmed = False
+        """The last message got no acknowledgement: the centre may hold it or not, so send the whole map."""
 
     def send(
         self, closed: StateGrid, round_: int, position_rc: tuple[int, int], window: tuple[slice, slice] | None = None
@@ -86,11 +88,12 @@ class RobotSender:
         full = sparse_frontier_map(closed, self.robot, round_, position_rc, origin, self._acked.shape)
         full_bytes = encode(full)
         incremental = full_bytes
-        if self._acked_round != FULL:
+        if self._acked_round != FULL and not self._unconfirmed:
             # The acknowledged map's cells lie in an earlier, smaller window: comparing in this one suffices.
             delta_bytes = encode(changed_since(self._acked, full, self._acked_round, window))
             if len(delta_bytes) < len(full_bytes):
                 incremental = delta_bytes
+        self._unconfirmed = True  # until the centre acknowledges this round
         return full_bytes, incremental
 
     def grid_delta_bytes(self, own: StateGrid, window: tuple[slice, slice]) -> int:
@@ -113,6 +116,7 @@ class RobotSender:
             self._acked.fill(0)
         np.put(self._acked, message.cells, message.codes)
         self._acked_round = message.round
+        self._unconfirmed = False
         if self._sent_grid is not None:
             window, ros = self._sent_grid
             self._acked_grid[window] = ros
@@ -188,11 +192,11 @@ class TeamLink:
         or request for a whole map back), drawn from ``rng``.
 
     The protocol under loss: a robot sends its delta against the last map the centre acknowledged to it.
-    A lost message is not acknowledged, so the next delta still applies to what the centre holds. A lost
-    acknowledgement leaves the centre a round ahead of what the robot believes: the centre never applies
-    a delta to a base it lacks, asks for the whole map instead, and the robot resends it at once (the
-    request and the resend may be lost too; then the robot tries again next round). A restarted centre
-    holds no base at all, so every robot's next delta is answered the same way.
+    A robot whose last message got no acknowledgement cannot tell a lost message (the centre holds its
+    base) from a lost acknowledgement (the centre is a round ahead), so it sends its whole map next. The
+    centre never applies a delta to a base it lacks: it asks for the whole map and the robot resends it at
+    once (the request and the resend may be lost too; then the robot tries again next round). That is how
+    a restarted centre, which holds no base at all, gets every robot's map back.
     """
 
     def __init__(

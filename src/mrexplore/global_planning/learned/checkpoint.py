@@ -14,7 +14,15 @@ from mrexplore.config import LearnedConfig, config_from_dict, config_to_dict
 from mrexplore.global_planning.learned.network import MultiGraphNet
 from mrexplore.types import MrExploreError
 
-__all__ = ["save_policy", "load_policy", "default_policy_path", "file_sha256", "code_version", "LoadedPolicy"]
+__all__ = [
+    "save_policy",
+    "load_policy",
+    "weights_digest",
+    "default_policy_path",
+    "file_sha256",
+    "code_version",
+    "LoadedPolicy",
+]
 
 MAX_POLICY_BYTES = 64 << 20
 """Largest policy file read (the shipped one is 0.3 MB): a bigger file is refused before torch sees it."""
@@ -62,17 +70,30 @@ def save_policy(path: Path, net: MultiGraphNet, meta: dict[str, Any] | None = No
     """Write the weights (float32), the network's config, the code version and ``meta`` (plain data)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    state = {k: v.detach().float().contiguous() for k, v in net.state_dict().items()}
     blob = {
         "format": "mrexplore-policy-1",
         "learned_config": config_to_dict(net.cfg),
         "value_inputs": net.value_inputs,
-        "state_dict": {k: v.detach().float().contiguous() for k, v in net.state_dict().items()},
+        "state_dict": state,
+        "weights_sha256": weights_digest(state),
         "code_version": code_version(),
         "meta": meta or {},
     }
     tmp = path.with_name(path.name + ".tmp")
     torch.save(blob, tmp)
     tmp.replace(path)  # atomic: a kill never leaves half a policy
+
+
+def weights_digest(state: dict[str, torch.Tensor]) -> str:
+    """sha256 over the weights (names, shapes and float32 bytes, in name order): a file whose weights were
+    corrupted after saving no longer matches (torch's archive format checks no sums of its own)."""
+    h = hashlib.sha256()
+    for name in sorted(state):
+        t = state[name].detach().float().contiguous().cpu()
+        h.update(f"{name}{tuple(t.shape)}".encode())
+        h.update(t.numpy().tobytes())
+    return h.hexdigest()
 
 
 def load_policy(path: Path | None = None) -> LoadedPolicy:
@@ -102,6 +123,8 @@ def load_policy(path: Path | None = None) -> LoadedPolicy:
         bad = [k for k, v in state.items() if not isinstance(v, torch.Tensor) or not torch.isfinite(v).all()]
         if bad:
             raise MrExploreError(f"weights {bad[0]} hold NaN or infinite values (or are no tensor)")
+        if "weights_sha256" in blob and blob["weights_sha256"] != weights_digest(state):
+            raise MrExploreError("weights do not match the digest saved with them: the file is corrupted")
         net.load_state_dict(state)
     except (KeyError, TypeError, ValueError, AttributeError, RuntimeError, MrExploreError) as exc:
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__

@@ -178,7 +178,7 @@ def _run_expert(job: _Job, net: MultiGraphNet) -> dict[str, Any]:
     while m.advance():
         problem = m.pose()
         if problem is None:
-            break
+            continue  # the end (advance says so next), or a round where the centre heard nobody
         own = student.assign(problem)
         if decisions % cfg.label_every == 0 and problem.n_clusters > 1:
             cands = candidate_assignments(problem, own, student.heuristic, cfg.noisy_candidates, cfg.noise_m, rng)
@@ -201,24 +201,24 @@ def _run_ppo(job: _Job, net: MultiGraphNet) -> dict[str, Any]:
     rewards: list[float] = []
     discounts: list[float] = []
     last_step = 0
-    while True:
-        more = m.advance()
-        if record:  # close the interval of the previous decision
-            rewards.append(m.reward_since_decision)
-            discounts.append(cfg.gamma ** (m.steps - last_step))
-        if not more:
-            break
+    before_pose = 0.0
+    while m.advance():
+        before_pose = m.reward_since_decision  # a pose that ends the mission resets it
         planner.value_extra = privileged_scalars(m)
         n_before = len(record)
         if m.pose() is None:
-            break
+            continue  # the end (advance says so next), or a round where the centre heard nobody
+        if record:  # close the interval of the previous decision
+            rewards.append(m.reward_since_decision)
+            discounts.append(cfg.gamma ** (m.steps - last_step))
         m.commit()
         last_step = m.steps
         if len(record) == n_before:  # no assignment was drawn (cannot happen after a posed problem)
             raise MrExploreError("the sampling planner recorded no step")
-    if len(rewards) < len(record):  # the mission ended at a pose: the last interval is already closed
-        rewards.append(m.reward_since_decision)
-        discounts.append(0.0)
+    if record:  # the last interval: up to the end at a pose, or to the budget
+        ended_at_pose = m.decision is not None and m.decision.done_reason is not None
+        rewards.append(before_pose if ended_at_pose else m.reward_since_decision)
+        discounts.append(0.0 if ended_at_pose else cfg.gamma ** (m.steps - last_step))
     if m.done_reason != "max_steps" and discounts:
         discounts[-1] = 0.0  # explored: nothing follows
     return {
