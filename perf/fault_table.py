@@ -74,7 +74,7 @@ def main() -> None:
             fewer, lo, hi = paired_bootstrap([a for a, _ in pairs], [b for _, b in pairs])
             steps = np.mean([float(r["steps"]) for r in rows])
             lines.append(
-                f"| {strategy} | {name} | {len(rows)} | {steps:.1f} | {-fewer:+.1f}% [{-hi:+.1f}, {-lo:+.1f}] "
+                f"| {strategy} | {name} | {len(rows)} | {steps:.1f} | {_pct(-fewer)}% [{_pct(-hi)}, {_pct(-lo)}] "
                 f"| {min(float(r['coverage']) for r in rows):.4f} "
                 f"| {sum(r['done_reason'] == 'max_steps' for r in rows)} "
                 f"| {np.mean([int(r['messages_lost']) for r in rows]):.1f} "
@@ -82,6 +82,10 @@ def main() -> None:
             )
     (out / "README.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
+
+
+def _pct(x: float) -> str:
+    return f"{x + 0.0:+.1f}".replace("-0.0", "+0.0")  # no negative zero
 
 
 def _key(r: dict[str, str]) -> tuple[str, str, str]:

@@ -427,13 +427,14 @@ class Mission:
         """The centre's time since ``t``: decoding, rebuilding and planning; the robots encode on board."""
         return (time.perf_counter() - t) * 1e3 - self.link.robot_ms
 
-    def decide(self) -> Decision:
-        """Take the pending decision with the strategy's own planner and apply it."""
+    def decide(self) -> Decision | None:
+        """Take the pending decision with the strategy's own planner and apply it; None where the centre
+        heard no robot in time (faults): no decision, the robots carry on with what they have."""
         t, args = self._round()
-        if len(self._active) == 0:  # the centre heard nobody in time: robots carry on with what they have
+        if len(self._active) == 0:
             self.plan_ms.append(self._centre_ms(t))
             self._idle_round()
-            return self.decision  # type: ignore[return-value]
+            return None
         decision = self._expand(self.strategy.decide(*args))  # type: ignore[arg-type]
         self.plan_ms.append(self._centre_ms(t))
         self._apply(decision)
