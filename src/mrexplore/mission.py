@@ -465,9 +465,7 @@ class Mission:
         posed, ms = self._posed
         self._posed = None
         t = time.perf_counter()
-        problem = posed.problem
-        assert problem is not None
-        decision = self._expand(self.strategy.finish(posed, assignment or self.strategy.planner.assign(problem)))
+        decision = self._expand(self.strategy.finish(posed, assignment or self.strategy.assign(posed)))
         self.plan_ms.append(ms + (time.perf_counter() - t) * 1e3)
         self._apply(decision)
         return decision

@@ -4,15 +4,15 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
 from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig, SimConfig
-from mrexplore.global_planning.classical import NearestPlanner, UtilityPlanner
+from mrexplore.global_planning.classical import GeodesicPlanner, NearestPlanner, UtilityPlanner
 from mrexplore.global_planning.coscan import cap_tasks, lloyd_clusters, sample_tasks, two_opt_tour
-from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.oracle import plan_oracle_routes
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem, GlobalPlanner
 from mrexplore.local_planning.router import LocalRouter
@@ -25,6 +25,7 @@ from mrexplore.types import BoolGrid, CellState, MrExploreError, StateGrid
 __all__ = [
     "Decision",
     "PosedDecision",
+    "CandidateSet",
     "ExplorationPipeline",
     "STRATEGIES",
     "make_strategy",
@@ -105,6 +106,23 @@ def _decision(
 
 
 @dataclass(frozen=True)
+class CandidateSet:
+    """What a strategy offers its robots at one decision: the seam through which a strategy supplies its
+    own candidates (Mean-Shift clusters, CoScan tasks, oracle routes, ...), everything else being shared."""
+
+    clusters: Clusters
+    """The candidates, as clusters: a centre (the target distances are measured to), members, sizes."""
+    ended: str | None = None
+    """Why the mission ends here, where it does (``no_frontiers``, ``no_reachable_frontiers``,
+    ``plan_done``); None: the shared checks decide (no candidate left, or none reachable)."""
+    context: Any = None
+    """What the strategy's own routing reuses from building the candidates (CoScan's task distances)."""
+    owners: NDArray[np.int64] | None = None
+    """``(n_clusters,) int64`` the robot each candidate belongs to, where the strategy fixes it (the
+    oracle's routes); None: the global planner assigns."""
+
+
+@dataclass(frozen=True)
 class _Posed:
     """What layer 3 reuses from layer 1 and the distances of the same decision."""
 
@@ -112,6 +130,7 @@ class _Posed:
     fields: list[NDArray[np.float32]]
     passable: BoolGrid
     kept: dict[int, tuple[int, NDArray[np.int32]]]
+    candidates: CandidateSet | None = None
 
 
 @dataclass(frozen=True)
@@ -188,6 +207,42 @@ class ExplorationPipeline:
                 kept[i] = (k, route)
         return kept
 
+    # -- the seam: what a strategy may supply ---------------------------------------------------------
+    def planning_state(self, state: StateGrid) -> StateGrid:
+        """The grid paths are planned on (the centre's; the oracle plans on the truth)."""
+        return state
+
+    def candidates(
+        self,
+        state: StateGrid,
+        frontiers: Frontiers,
+        blacklist: BoolGrid | None,
+        robots_rc: NDArray[np.int32],
+        fields: Callable[[], list[NDArray[np.float32]]],
+        current: Sequence[NDArray[np.int32]] | None,
+        resolution_m: float,
+    ) -> CandidateSet:
+        """Layer 1's candidates: F_un (less blacklisted cells) clustered by Mean-Shift (paper IV-A).
+        ``fields()`` gives each robot's distance field on the planning grid (computed once, on demand)."""
+        un_rc = frontiers.un_rc
+        if blacklist is not None and len(un_rc):
+            un_rc = un_rc[~blacklist[un_rc[:, 0], un_rc[:, 1]]]
+        return CandidateSet(cluster_frontiers(un_rc, self.preprocess))
+
+    def route(self, i: int, k: int, problem: AssignmentProblem, work: _Posed) -> NDArray[np.int32]:
+        """Robot i's targets in its assigned candidate k: its current route where it keeps the cluster
+        (hysteresis), a local route through sub-clusters (paper IV-C), or the cluster's centre."""
+        clusters, fields = problem.clusters, work.fields
+        if work.kept.get(i, (None,))[0] == k:
+            return work.kept[i][1]
+        if self.local is not None and self.local.applies(int(clusters.sizes[k])):
+            route = self.local.route(
+                work.passable, tuple(problem.robots_rc[i]), fields[i], clusters.members_of(k), problem.resolution_m
+            )
+            return route.targets_rc if route is not None else clusters.centers_rc[k : k + 1]
+        return clusters.centers_rc[k : k + 1]
+
+    # -- the shared decision ---------------------------------------------------------------------------
     def pose(
         self,
         state: StateGrid,
@@ -207,55 +262,61 @@ class ExplorationPipeline:
         one decision to the next and robots turn back and forth.
         """
         frontiers = detect_frontiers(state)
-        un_rc = frontiers.un_rc
-        if blacklist is not None and len(un_rc):
-            un_rc = un_rc[~blacklist[un_rc[:, 0], un_rc[:, 1]]]
-        clusters = cluster_frontiers(un_rc, self.preprocess)
+        planning = self.planning_state(state)
+        passable = planning == CellState.FREE
+        computed: list[list[NDArray[np.float32]]] = []
+
+        def fields_now() -> list[NDArray[np.float32]]:
+            if not computed:
+                computed.append(distance_fields(passable, robots_rc))
+            return computed[0]
+
+        cand = self.candidates(state, frontiers, blacklist, robots_rc, fields_now, current, resolution_m)
+        clusters = cand.clusters
         n = len(robots_rc)
-        passable = state == CellState.FREE
-        dist = np.full((n, len(clusters)), np.inf)
-        fields = distance_fields(passable, robots_rc) if len(clusters) else []
-        for i, field_i in enumerate(fields):
-            dist[i] = distances_at(field_i, clusters.centers_rc)
-        kept = self._committed(clusters, fields, current, dist) if current is not None and self.commitment < 1 else {}
+        if cand.ended is not None:
+            return PosedDecision(None, _ended(planning, frontiers, clusters, n, cand.ended))
         if len(clusters) == 0:
-            return PosedDecision(None, _ended(state, frontiers, clusters, n, "no_frontiers"))
+            return PosedDecision(None, _ended(planning, frontiers, clusters, n, "no_frontiers"))
+        fields = fields_now()
+        dist = np.stack([distances_at(f, clusters.centers_rc) for f in fields])
+        kept = self._committed(clusters, fields, current, dist) if current is not None and self.commitment < 1 else {}
         if not np.isfinite(dist).any():
-            return PosedDecision(None, _ended(state, frontiers, clusters, n, "no_reachable_frontiers"))
+            return PosedDecision(None, _ended(planning, frontiers, clusters, n, "no_reachable_frontiers"))
         robots = np.asarray(robots_rc, np.int32)
         problem = AssignmentProblem(
             robots,
             clusters,
             dist,
             resolution_m,
-            state,
+            planning,
             current_cluster=_current_clusters(clusters, current, n),
             robot_dist_cells=np.stack([distances_at(f, robots) for f in fields]),
             rng=rng,
         )
-        return PosedDecision(problem, None, _Posed(frontiers, fields, passable, kept))
+        return PosedDecision(problem, None, _Posed(frontiers, fields, passable, kept, cand))
+
+    def assign(self, posed: PosedDecision) -> Assignment:
+        """The global layer's answer to a posed decision: the planner's, or the owners the strategy fixed."""
+        if posed.problem is None or posed.work is None:
+            raise MrExploreError("assign() needs a posed decision with a problem; an ended one is already final")
+        owners = posed.work.candidates.owners if posed.work.candidates is not None else None
+        if owners is None:
+            return self.planner.assign(posed.problem)
+        out = np.full(posed.problem.n_robots, UNASSIGNED, dtype=np.int64)
+        out[owners] = np.arange(len(owners))
+        return Assignment(out)
 
     def finish(self, posed: PosedDecision, assignment: Assignment) -> Decision:
         """Layer 3: routes and paths for the robots of ``assignment`` (an answer to ``posed.problem``)."""
         if posed.problem is None or posed.work is None:
             raise MrExploreError("finish() needs a posed decision with a problem; an ended one is already final")
         p, w = posed.problem, posed.work
-        clusters, fields = p.clusters, w.fields
-        routes = []
-        for i, k in enumerate(assignment.cluster_of_robot):
-            if k == UNASSIGNED:
-                targets = _NO_ROUTE
-            elif w.kept.get(i, (None,))[0] == k:
-                targets = w.kept[i][1]
-            elif self.local is not None and self.local.applies(int(clusters.sizes[k])):
-                route = self.local.route(
-                    w.passable, tuple(p.robots_rc[i]), fields[i], clusters.members_of(k), p.resolution_m
-                )
-                targets = route.targets_rc if route is not None else clusters.centers_rc[k : k + 1]
-            else:
-                targets = clusters.centers_rc[k : k + 1]
-            routes.append(targets)
-        return _decision(p.state, w.frontiers, clusters, assignment, routes, fields, w.passable)
+        routes = [
+            _NO_ROUTE if k == UNASSIGNED else self.route(i, int(k), p, w)
+            for i, k in enumerate(assignment.cluster_of_robot)
+        ]
+        return _decision(p.state, w.frontiers, p.clusters, assignment, routes, w.fields, w.passable)
 
     def decide(
         self,
@@ -272,7 +333,17 @@ class ExplorationPipeline:
         posed = self.pose(state, robots_rc, resolution_m, blacklist, current, rng)
         if posed.problem is None:
             return posed.final  # type: ignore[return-value]
-        return self.finish(posed, self.planner.assign(posed.problem))
+        return self.finish(posed, self.assign(posed))
+
+
+@dataclass(frozen=True)
+class _CoScanTasks:
+    """CoScan's candidates' context: the tasks, robot-to-task and task-to-task distances, task labels."""
+
+    tasks_rc: NDArray[np.int32]
+    d_robots: NDArray[np.float64]
+    d_tasks: NDArray[np.float64]
+    labels: NDArray[np.int64]
 
 
 @dataclass
@@ -286,16 +357,18 @@ class CoScanPipeline(ExplorationPipeline):
 
     coscan: CoScanConfig = field(default_factory=CoScanConfig)
 
-    def decide(
+    def candidates(
         self,
         state: StateGrid,
+        frontiers: Frontiers,
+        blacklist: BoolGrid | None,
         robots_rc: NDArray[np.int32],
+        fields: Callable[[], list[NDArray[np.float32]]],
+        current: Sequence[NDArray[np.int32]] | None,
         resolution_m: float,
-        blacklist: BoolGrid | None = None,
-        current: Sequence[NDArray[np.int32]] | None = None,
-        rng: np.random.Generator | None = None,
-    ) -> Decision:
-        frontiers = detect_frontiers(state)
+    ) -> CandidateSet:
+        """Tasks sampled on F_un, capped by reachability, clustered by robot-seeded geodesic Lloyd
+        iterations; each cluster's centre is its centroid task."""
         un = frontiers.un_mask.copy()
         if blacklist is not None:
             un &= ~blacklist
@@ -305,29 +378,27 @@ class CoScanPipeline(ExplorationPipeline):
         n = len(robots_rc)
         tasks = sample_tasks(np.argwhere(un), self.coscan.task_spacing_m / resolution_m)
         if len(tasks) == 0:
-            return _ended(state, frontiers, Clusters.empty(), n, "no_frontiers")
+            return CandidateSet(Clusters.empty(), "no_frontiers")
         passable = state == CellState.FREE
-        fields = distance_fields(passable, robots_rc)
-        d_robots = np.stack([distances_at(f, tasks) for f in fields])
+        d_robots = np.stack([distances_at(f, tasks) for f in fields()])
         keep = cap_tasks(d_robots.min(axis=0), self.coscan.tasks_per_robot * n)
         if len(keep) == 0:
-            return _ended(state, frontiers, Clusters.empty(), n, "no_reachable_frontiers")
+            return CandidateSet(Clusters.empty(), "no_reachable_frontiers")
         tasks, d_robots = tasks[keep], d_robots[:, keep]
         d_tasks = distance_matrix(passable, tasks, tasks)
         d_tasks = np.minimum(d_tasks, d_tasks.T)  # equal up to float rounding; keep it symmetric
         lloyd = lloyd_clusters(tasks, d_tasks, d_robots, self.coscan.delta_m / resolution_m, self.coscan.max_iterations)
         sizes = np.bincount(lloyd.labels, minlength=len(lloyd.centroids)).astype(np.int32)
         clusters = Clusters(tasks[lloyd.centroids], sizes, tasks, lloyd.labels.astype(np.int32))
-        assignment = Assignment(match_min_cost(d_robots[:, lloyd.centroids]))
-        routes = []
-        for i, k in enumerate(assignment.cluster_of_robot):
-            if k == UNASSIGNED:
-                routes.append(_NO_ROUTE)
-                continue
-            members = np.flatnonzero(lloyd.labels == k)
-            order = two_opt_tour(d_robots[i, members], d_tasks[np.ix_(members, members)])
-            routes.append(tasks[members[order]])
-        return _decision(state, frontiers, clusters, assignment, routes, fields, passable)
+        return CandidateSet(clusters, context=_CoScanTasks(tasks, d_robots, d_tasks, lloyd.labels))
+
+    def route(self, i: int, k: int, problem: AssignmentProblem, work: _Posed) -> NDArray[np.int32]:
+        """The cluster's tasks in a 2-opt tour from the robot."""
+        assert work.candidates is not None
+        c: _CoScanTasks = work.candidates.context
+        members = np.flatnonzero(c.labels == k)
+        order = two_opt_tour(c.d_robots[i, members], c.d_tasks[np.ix_(members, members)])
+        return c.tasks_rc[members[order]]
 
 
 @dataclass
@@ -354,29 +425,39 @@ class OraclePipeline(ExplorationPipeline):
         self._plan = plan.routes
         self._truth_state = np.where(truth.occupied, CellState.OCCUPIED, CellState.FREE).astype(np.uint8)
 
-    def decide(
+    def planning_state(self, state: StateGrid) -> StateGrid:
+        if self._truth_state is None:
+            raise MrExploreError("the oracle needs the ground truth: call prepare() before decide()")
+        return self._truth_state
+
+    def candidates(
         self,
         state: StateGrid,
+        frontiers: Frontiers,
+        blacklist: BoolGrid | None,
         robots_rc: NDArray[np.int32],
+        fields: Callable[[], list[NDArray[np.float32]]],
+        current: Sequence[NDArray[np.int32]] | None,
         resolution_m: float,
-        blacklist: BoolGrid | None = None,
-        current: Sequence[NDArray[np.int32]] | None = None,
-        rng: np.random.Generator | None = None,
-    ) -> Decision:
-        if self._plan is None or self._truth_state is None:
+    ) -> CandidateSet:
+        """Each robot's route is one candidate, owned by that robot: the plan at the first decision, what
+        is left of it later."""
+        if self._plan is None:
             raise MrExploreError("the oracle needs the ground truth: call prepare() before decide()")
-        n = len(robots_rc)
-        truth = self._truth_state
-        # The first decision hands out the plan; later ones keep each robot on what is left of its route.
         routes = list(current) if current is not None and any(len(c) for c in current) else self._plan
-        self._plan = [_NO_ROUTE] * n
-        frontiers = detect_frontiers(state)
-        if not any(len(r) for r in routes):
-            return _ended(truth, frontiers, Clusters.empty(), n, "plan_done")
-        passable = truth == CellState.FREE
-        owner = np.array([i if len(r) else UNASSIGNED for i, r in enumerate(routes)], dtype=np.int64)
-        fields = distance_fields(passable, robots_rc)
-        return _decision(truth, frontiers, Clusters.empty(), Assignment(owner), routes, fields, passable)
+        self._plan = [_NO_ROUTE] * len(robots_rc)
+        owners = np.array([i for i, r in enumerate(routes) if len(r)], dtype=np.int64)
+        if len(owners) == 0:
+            return CandidateSet(Clusters.empty(), "plan_done")
+        members = np.vstack([routes[i] for i in owners]).astype(np.int32)
+        labels = np.repeat(np.arange(len(owners)), [len(routes[i]) for i in owners]).astype(np.int32)
+        centres = np.stack([routes[i][0] for i in owners]).astype(np.int32)
+        sizes = np.array([len(routes[i]) for i in owners], dtype=np.int32)
+        return CandidateSet(Clusters(centres, sizes, members, labels), owners=owners)
+
+    def route(self, i: int, k: int, problem: AssignmentProblem, work: _Posed) -> NDArray[np.int32]:
+        """The robot's own route, in its order."""
+        return problem.clusters.members_of(k)
 
 
 CENTRE_COMMITMENT = 0.5
@@ -428,7 +509,7 @@ def _hier(
 def _coscan(
     gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig, policy: str | None
 ) -> ExplorationPipeline:
-    return CoScanPipeline("coscan", UtilityPlanner(gp), pp)
+    return CoScanPipeline("coscan", GeodesicPlanner(), pp)
 
 
 def _oracle(

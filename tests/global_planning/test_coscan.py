@@ -111,3 +111,42 @@ def test_coscan_decision_by_hand() -> None:
     assert d.done_reason is None
     assert d.clusters.members_rc.tolist() == [[1, 1], [1, 9]] and d.clusters.labels.tolist() == [0, 0]
     assert d.routes[0].tolist() == [[1, 1], [1, 9]] and d.goals_rc.tolist() == [[1, 1]]
+
+
+def test_coscan_and_the_oracle_plug_in_through_the_candidate_seam() -> None:
+    """Strategies that choose their own candidates supply them (and their routing) through the pipeline's
+    seam; none overrides the shared decision (STYLE rule 17)."""
+    from mrexplore.strategies import CoScanPipeline, ExplorationPipeline, OraclePipeline
+
+    for cls in (CoScanPipeline, OraclePipeline):
+        assert "decide" not in cls.__dict__ and "pose" not in cls.__dict__ and "finish" not in cls.__dict__
+        assert "candidates" in cls.__dict__ and "route" in cls.__dict__
+    assert ExplorationPipeline.decide is CoScanPipeline.decide
+
+
+def test_a_new_strategy_supplies_candidates_without_touching_the_decision() -> None:
+    """A strategy offering two fixed cells as candidates: the shared code measures the distances, the
+    Hungarian planner assigns, paths lead there."""
+    from conftest import state_grid
+
+    from mrexplore.global_planning.classical import GeodesicPlanner
+    from mrexplore.preprocessing.clustering import Clusters
+    from mrexplore.strategies import CandidateSet, ExplorationPipeline
+
+    class TwoCells(ExplorationPipeline):
+        def candidates(self, state, frontiers, blacklist, robots_rc, fields, current, resolution_m):
+            cells = np.array([[1, 1], [1, 7]], np.int32)
+            return CandidateSet(Clusters(cells, np.ones(2, np.int32), cells, np.arange(2, dtype=np.int32)))
+
+    grid = state_grid(
+        """
+        #########
+        #.......#
+        #.......#
+        #########
+        """
+    )
+    d = TwoCells("two", GeodesicPlanner()).decide(grid, np.array([[2, 6], [2, 2]], np.int32), 0.1)
+    assert d.done_reason is None
+    assert d.goals_rc.tolist() == [[1, 7], [1, 1]]  # each robot to the nearer cell
+    assert d.paths[0][0].tolist() == [2, 6] and d.paths[0][-1].tolist() == [1, 7]

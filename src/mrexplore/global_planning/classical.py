@@ -10,7 +10,7 @@ from mrexplore.config import GlobalPlanningConfig
 from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 
-__all__ = ["NearestPlanner", "UtilityPlanner", "utility_cost"]
+__all__ = ["NearestPlanner", "UtilityPlanner", "GeodesicPlanner", "utility_cost"]
 
 
 @dataclass
@@ -47,3 +47,14 @@ class UtilityPlanner:
 
     def assign(self, problem: AssignmentProblem) -> Assignment:
         return Assignment(match_min_cost(utility_cost(problem, self.cfg)))
+
+
+@dataclass
+class GeodesicPlanner:
+    """Robots matched to clusters by the Hungarian algorithm on geodesic distance alone (minimum total
+    distance): CoScan-2D's assignment of its clusters."""
+
+    name: str = "geodesic"
+
+    def assign(self, problem: AssignmentProblem) -> Assignment:
+        return Assignment(match_min_cost(problem.dist_cells))
