@@ -1,0 +1,133 @@
+"""NeuralCoMapping's network (Ye, Dong et al., CVPR 2022, from its public code), re-implemented for 2D.
+
+Robots and frontier nodes are graph nodes with features (x, y, is_frontier, is_robot), lifted by an MLP;
+the robot-to-node edge feature is the geodesic distance alone, lifted by an MLP. Blocks of attentional
+propagation follow: self attention within the robots and within the nodes (multi-head dot product), then
+cross attention both ways whose weights come from an MLP over [query, key, distance embedding]; each
+update is a residual MLP of [features, message]. Robot-node scores (scaled dot products) are masked where a
+node lies outside the robot's window or out of its reach, log-softmaxed over the robots, and put through
+the log-space Sinkhorn layer with a learned dustbin; each robot's row, sharpened, is its policy's logits
+(:mod:`~mrexplore.global_planning.learned.ncm_policy`).
+
+Batches hold decisions padded to the largest team and node count; padding changes no output (tested).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import torch
+from torch import Tensor, nn
+
+from mrexplore.global_planning.learned.sinkhorn import log_optimal_transport
+
+__all__ = ["NcmConfig", "NcmBatch", "NcmNet"]
+
+_MASKED = -1e9
+"""Attention logit of a masked key: exp() underflows to 0 beside any real key, and stays finite."""
+
+
+@dataclass(frozen=True)
+class NcmConfig:
+    """Sizes of NCM's network (its public defaults)."""
+
+    hidden: int = 32
+    heads: int = 4
+    blocks: int = 3
+    sinkhorn_iters: int = 5
+    sharpen: float = 15.0
+    """Logits of the per-robot categoricals are the Sinkhorn plan's log entries times this."""
+
+
+@dataclass
+class NcmBatch:
+    """Decisions padded to the largest team (R) and node count (N) of the batch.
+
+    robots_xy ``(B, R, 2)`` and nodes_xy ``(B, N, 2)`` float32, normalised by a map scale; dist ``(B, R, N)``
+    float32 geodesic distance, normalised (any finite value where not allowed); allowed ``(B, R, N)`` bool:
+    the node is reachable and inside the robot's window; robot_mask ``(B, R)`` and node_mask ``(B, N)`` bool.
+    """
+
+    robots_xy: Tensor
+    nodes_xy: Tensor
+    dist: Tensor
+    allowed: Tensor
+    robot_mask: Tensor
+    node_mask: Tensor
+
+
+def _mlp(i: int, h: int, o: int) -> nn.Sequential:
+    return nn.Sequential(nn.Linear(i, h), nn.ReLU(), nn.Linear(h, o))
+
+
+class _SelfAttention(nn.Module):
+    """Multi-head dot-product attention within one set of nodes, residual MLP update."""
+
+    def __init__(self, d: int, heads: int) -> None:
+        super().__init__()
+        self.attn = nn.MultiheadAttention(d, heads, batch_first=True)
+        self.update = _mlp(2 * d, 2 * d, d)
+
+    def forward(self, x: Tensor, mask: Tensor) -> Tensor:
+        msg, _ = self.attn(x, x, x, key_padding_mask=~mask, need_weights=False)
+        msg = torch.nan_to_num(msg) * mask[..., None]  # a set with no real member sends nothing
+        return x + self.update(torch.cat([x, msg], dim=-1))
+
+
+class _CrossAttention(nn.Module):
+    """Attention from one set to the other whose logits are an MLP over [query, key, edge embedding]."""
+
+    def __init__(self, d: int) -> None:
+        super().__init__()
+        self.q, self.k, self.v = nn.Linear(d, d), nn.Linear(d, d), nn.Linear(d, d)
+        self.score = _mlp(3 * d, d, 1)
+        self.update = _mlp(2 * d, 2 * d, d)
+
+    def forward(self, x: Tensor, y: Tensor, edge: Tensor, allowed: Tensor) -> Tensor:
+        """x ``(B, A, d)`` attends to y ``(B, C, d)`` over edges ``(B, A, C, d)`` where ``allowed``."""
+        q, k, v = self.q(x), self.k(y), self.v(y)
+        A, C = x.shape[1], y.shape[1]
+        pair = torch.cat([q[:, :, None].expand(-1, -1, C, -1), k[:, None].expand(-1, A, -1, -1), edge], dim=-1)
+        logits = self.score(pair)[..., 0].masked_fill(~allowed, _MASKED)
+        w = torch.softmax(logits, dim=-1) * allowed.any(dim=-1, keepdim=True)
+        return x + self.update(torch.cat([x, w @ v], dim=-1))
+
+
+class NcmNet(nn.Module):
+    """NCM's actor: per-robot logits over the nodes (``(B, R, N)``, ``-inf`` where not allowed or padding)."""
+
+    def __init__(self, cfg: NcmConfig | None = None) -> None:
+        super().__init__()
+        self.cfg = cfg = cfg or NcmConfig()
+        d = cfg.hidden
+        self.node_in = _mlp(4, d, d)
+        self.edge_in = _mlp(1, d, d)
+        self.self_robots = nn.ModuleList(_SelfAttention(d, cfg.heads) for _ in range(cfg.blocks))
+        self.self_nodes = nn.ModuleList(_SelfAttention(d, cfg.heads) for _ in range(cfg.blocks))
+        self.to_nodes = nn.ModuleList(_CrossAttention(d) for _ in range(cfg.blocks))
+        self.to_robots = nn.ModuleList(_CrossAttention(d) for _ in range(cfg.blocks))
+        self.dustbin = nn.Parameter(torch.tensor(1.0))
+
+    def forward(self, b: NcmBatch) -> Tensor:
+        B, R, N = b.dist.shape
+        robot_flags = torch.tensor([0.0, 1.0]).expand(B, R, 2)
+        node_flags = torch.tensor([1.0, 0.0]).expand(B, N, 2)
+        r = self.node_in(torch.cat([b.robots_xy, robot_flags], dim=-1))
+        f = self.node_in(torch.cat([b.nodes_xy, node_flags], dim=-1))
+        e = self.edge_in(b.dist[..., None])
+        pair = b.allowed & b.robot_mask[:, :, None] & b.node_mask[:, None, :]
+        for sr, sf, to_r, to_f in zip(self.self_robots, self.self_nodes, self.to_robots, self.to_nodes, strict=True):
+            r, f = sr(r, b.robot_mask), sf(f, b.node_mask)
+            r, f = to_r(r, f, e, pair), to_f(f, r, e.transpose(1, 2), pair.transpose(1, 2))
+        scores = (r @ f.transpose(1, 2)) / math.sqrt(self.cfg.hidden)
+        out = torch.full((B, R, N), float("-inf"))
+        for i in range(B):
+            m, n = int(b.robot_mask[i].sum()), int(b.node_mask[i].sum())
+            if m == 0 or n == 0:
+                continue
+            allowed = pair[i, :m, :n]
+            s = torch.log_softmax(scores[i, :m, :n].masked_fill(~allowed, _MASKED), dim=0)  # over robots
+            plan = log_optimal_transport(s, self.dustbin, self.cfg.sinkhorn_iters, allowed)
+            out[i, :m, :n] = (plan[:m, :n] * self.cfg.sharpen).masked_fill(~allowed, float("-inf"))
+        return out
