@@ -13,6 +13,7 @@ from scipy import ndimage
 from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig, SimConfig
 from mrexplore.global_planning.classical import GeodesicPlanner, NearestPlanner, UtilityPlanner
 from mrexplore.global_planning.coscan import cap_tasks, lloyd_clusters, sample_tasks, two_opt_tour
+from mrexplore.global_planning.ncm_nodes import ncm_frontier, pool_nodes
 from mrexplore.global_planning.oracle import plan_oracle_routes
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem, GlobalPlanner
 from mrexplore.local_planning.router import LocalRouter
@@ -336,6 +337,19 @@ class ExplorationPipeline:
         return self.finish(posed, self.assign(posed))
 
 
+def _denoised_un(frontiers: Frontiers, blacklist: BoolGrid | None, min_size: int) -> BoolGrid:
+    """F_un less blacklisted cells and less 8-connected pieces under ``min_size`` cells: the noise rule of
+    the Mean-Shift clusters, for strategies with candidates of their own, so that every strategy ends on the
+    same frontiers."""
+    un = frontiers.un_mask.copy()
+    if blacklist is not None:
+        un &= ~blacklist
+    labels, _ = ndimage.label(un, structure=np.ones((3, 3)))
+    counts = np.bincount(labels.ravel())
+    un &= counts[labels] >= min_size
+    return un
+
+
 @dataclass(frozen=True)
 class _CoScanTasks:
     """CoScan's candidates' context: the tasks, robot-to-task and task-to-task distances, task labels."""
@@ -369,12 +383,7 @@ class CoScanPipeline(ExplorationPipeline):
     ) -> CandidateSet:
         """Tasks sampled on F_un, capped by reachability, clustered by robot-seeded geodesic Lloyd
         iterations; each cluster's centre is its centroid task."""
-        un = frontiers.un_mask.copy()
-        if blacklist is not None:
-            un &= ~blacklist
-        labels, _ = ndimage.label(un, structure=np.ones((3, 3)))
-        counts = np.bincount(labels.ravel())
-        un &= counts[labels] >= self.preprocess.min_cluster_size
+        un = _denoised_un(frontiers, blacklist, self.preprocess.min_cluster_size)
         n = len(robots_rc)
         tasks = sample_tasks(np.argwhere(un), self.coscan.task_spacing_m / resolution_m)
         if len(tasks) == 0:
@@ -399,6 +408,31 @@ class CoScanPipeline(ExplorationPipeline):
         members = np.flatnonzero(c.labels == k)
         order = two_opt_tour(c.d_robots[i, members], c.d_tasks[np.ix_(members, members)])
         return c.tasks_rc[members[order]]
+
+
+@dataclass
+class NcmPipeline(ExplorationPipeline):
+    """NeuralCoMapping re-implemented in 2D (Ye, Dong et al., CVPR 2022): its candidates are frontier
+    cells clear of obstacles pooled to 0.4 m nodes (:mod:`~mrexplore.global_planning.ncm_nodes`), one node
+    per cluster; its planner (:class:`~mrexplore.global_planning.learned.ncm_network.NcmPlanner`) lets
+    every robot pick a node; robots drive to their node. Where no frontier cell keeps clear of obstacles
+    (passages under 0.4 m wide) the plain F_un cells are pooled instead."""
+
+    def candidates(
+        self,
+        state: StateGrid,
+        frontiers: Frontiers,
+        blacklist: BoolGrid | None,
+        robots_rc: NDArray[np.int32],
+        fields: Callable[[], list[NDArray[np.float32]]],
+        current: Sequence[NDArray[np.int32]] | None,
+        resolution_m: float,
+    ) -> CandidateSet:
+        un = _denoised_un(frontiers, blacklist, self.preprocess.min_cluster_size)
+        clear = ncm_frontier(state, Frontiers(un, frontiers.occ_mask), resolution_m)
+        nodes = pool_nodes(clear if clear.any() else un, resolution_m)
+        labels = np.arange(len(nodes), dtype=np.int32)
+        return CandidateSet(Clusters(nodes, np.ones(len(nodes), np.int32), nodes, labels))
 
 
 @dataclass

@@ -17,12 +17,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
 import torch
 from torch import Tensor, nn
 
+from mrexplore.global_planning.learned.ncm_policy import per_robot_argmax, per_robot_sample
 from mrexplore.global_planning.learned.sinkhorn import log_optimal_transport
+from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 
-__all__ = ["NcmConfig", "NcmBatch", "NcmNet"]
+__all__ = ["NcmConfig", "NcmBatch", "NcmNet", "NcmPlanner", "ncm_batch", "WINDOW_M"]
 
 _MASKED = -1e9
 """Attention logit of a masked key: exp() underflows to 0 beside any real key, and stays finite."""
@@ -131,3 +134,60 @@ class NcmNet(nn.Module):
             plan = log_optimal_transport(s, self.dustbin, self.cfg.sinkhorn_iters, allowed)
             out[i, :m, :n] = (plan[:m, :n] * self.cfg.sharpen).masked_fill(~allowed, float("-inf"))
         return out
+
+
+WINDOW_M = 24.0
+"""Nodes farther than this (straight line) from a robot are outside its window (NCM's local map)."""
+POSITION_SCALE_M = 24.0
+"""Coordinates and distances enter the network divided by this."""
+
+
+def ncm_batch(problem: AssignmentProblem, window_m: float = WINDOW_M, scale_m: float = POSITION_SCALE_M) -> NcmBatch:
+    """The network's input for one decision: robots and candidate nodes (the problem's cluster centres) in
+    metres over ``scale_m``, geodesic distances likewise, pairs allowed where reachable and within
+    ``window_m`` in a straight line."""
+    res = problem.resolution_m
+    robots = torch.from_numpy(problem.robots_rc * res / scale_m).float()
+    nodes = torch.from_numpy(problem.clusters.centers_rc * res / scale_m).float()
+    d = torch.from_numpy(problem.dist_cells * res / scale_m).float()
+    reachable = torch.isfinite(d)
+    euclid = torch.cdist(robots, nodes) * scale_m
+    allowed = reachable & (euclid <= window_m)
+    return NcmBatch(
+        robots[None],
+        nodes[None],
+        torch.where(reachable, d, torch.zeros_like(d))[None],
+        allowed[None],
+        torch.ones(1, len(robots), dtype=torch.bool),
+        torch.ones(1, len(nodes), dtype=torch.bool),
+    )
+
+
+@dataclass
+class NcmPlanner:
+    """NCM behind the :class:`~mrexplore.global_planning.protocol.GlobalPlanner` protocol: each robot takes
+    the node of largest logit (``sample=False``, the deterministic variant) or draws its own (NCM's
+    evaluation), with the problem's generator. A robot with no allowed node gets none."""
+
+    net: NcmNet
+    sample: bool = False
+    name: str = "ncm"
+
+    def logits(self, problem: AssignmentProblem) -> Tensor:
+        """``(R, N)`` per-robot logits (``-inf`` where not allowed)."""
+        with torch.no_grad():
+            return self.net(ncm_batch(problem))[0]
+
+    def assign(self, problem: AssignmentProblem) -> Assignment:
+        logits = self.logits(problem)
+        ok = torch.isfinite(logits).any(dim=1)
+        out = np.full(problem.n_robots, UNASSIGNED, dtype=np.int64)
+        if not ok.any():
+            return Assignment(out)
+        if self.sample:
+            seed = int(problem.rng.integers(2**62)) if problem.rng is not None else 0
+            picks = per_robot_sample(logits[ok], torch.Generator().manual_seed(seed))
+        else:
+            picks = per_robot_argmax(logits[ok])
+        out[ok.numpy()] = picks.numpy()
+        return Assignment(out)
