@@ -24,6 +24,7 @@ from torch import Tensor, nn
 from mrexplore.global_planning.learned.ncm_policy import per_robot_argmax, per_robot_sample
 from mrexplore.global_planning.learned.sinkhorn import log_optimal_transport
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
+from mrexplore.threads import thread_count
 
 __all__ = ["NcmConfig", "NcmBatch", "NcmNet", "NcmPlanner", "ncm_batch", "WINDOW_M"]
 
@@ -172,6 +173,10 @@ class NcmPlanner:
     net: NcmNet
     sample: bool = False
     name: str = "ncm"
+
+    def __post_init__(self) -> None:
+        if torch.get_num_threads() > thread_count():  # as LearnedPlanner: one mission per core in the bench
+            torch.set_num_threads(thread_count())
 
     def logits(self, problem: AssignmentProblem) -> Tensor:
         """``(R, N)`` per-robot logits (``-inf`` where not allowed)."""
