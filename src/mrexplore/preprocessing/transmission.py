@@ -63,7 +63,7 @@ class RobotSender:
 
     :meth:`send` gives the whole map (the paper's message) and the incremental one: the delta against the
     last acknowledged map, or the whole map where that is shorter (the first round, or after most of the
-    boundary moved).
+    boundary moved) or where the last message went unacknowledged (the centre may or may not hold it).
     """
 
     def __init__(self, robot: int, shape: tuple[int, int]) -> None:
