@@ -236,6 +236,13 @@ def test_json_is_strict() -> None:
     json.dumps(strict_json({"x": -math.inf}), allow_nan=False)
 
 
+def _refused(policy: Path) -> str:
+    """The one-line error a policy file gets."""
+    with pytest.raises(MrExploreError) as err:
+        load_policy(policy)
+    return str(err.value)
+
+
 def test_hostile_policy_files(tmp_path, capsys) -> None:
     (tmp_path / "text.pt").write_text("not a checkpoint")
     with pytest.raises(MrExploreError, match=r"is not a mrexplore policy \(UnpicklingError\); retrain it"):
@@ -244,15 +251,12 @@ def test_hostile_policy_files(tmp_path, capsys) -> None:
     with torch.no_grad():
         next(iter(net.parameters())).fill_(float("nan"))
     save_policy(tmp_path / "nan.pt", net)
-    with pytest.raises(MrExploreError) as err:
-        load_policy(tmp_path / "nan.pt")
-    assert "hold NaN or infinite values" in str(err.value) and str(err.value).endswith("; retrain it")
+    message = _refused(tmp_path / "nan.pt")
+    assert "hold NaN or infinite values" in message and message.endswith("; retrain it")
     blob = torch.load(tmp_path / "nan.pt", weights_only=True)
     blob["learned_config"]["hidden"] = 10**6  # would allocate terabytes
     torch.save(blob, tmp_path / "huge.pt")
-    with pytest.raises(MrExploreError) as err:
-        load_policy(tmp_path / "huge.pt")
-    assert str(err.value) == (
+    assert _refused(tmp_path / "huge.pt") == (
         f"policy file {tmp_path / 'huge.pt'} does not fit this network (hidden must be in [4, 1024], got 1000000); "
         "retrain it"
     )
@@ -261,9 +265,7 @@ def test_hostile_policy_files(tmp_path, capsys) -> None:
     blob = torch.load(good, weights_only=True)
     next(iter(blob["state_dict"].values())).view(-1)[0] += 0.5  # a changed weight, still finite
     torch.save(blob, tmp_path / "changed.pt")
-    with pytest.raises(MrExploreError) as err:
-        load_policy(tmp_path / "changed.pt")
-    assert str(err.value) == (
+    assert _refused(tmp_path / "changed.pt") == (
         f"policy file {tmp_path / 'changed.pt'} does not fit this network (weights do not match the digest saved "
         "with them: the file is corrupted); retrain it"
     )

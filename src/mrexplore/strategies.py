@@ -26,6 +26,7 @@ from mrexplore.types import BoolGrid, CellState, MrExploreError, StateGrid
 __all__ = [
     "Decision",
     "PosedDecision",
+    "CandidateQuery",
     "CandidateSet",
     "ExplorationPipeline",
     "STRATEGIES",
@@ -104,6 +105,24 @@ def _decision(
         else:
             paths.append(_NO_ROUTE)
     return Decision(state, frontiers, clusters, assignment, goals, routes, paths, None)
+
+
+@dataclass(frozen=True)
+class CandidateQuery:
+    """What a strategy may look at when it builds its candidates (one decision at the centre)."""
+
+    state: StateGrid
+    """``(H, W) uint8`` the centre's closed grid."""
+    frontiers: Frontiers
+    blacklist: BoolGrid | None
+    """Frontier cells that stopped being candidates (stood on without resolving them; stalled goals)."""
+    robots_rc: NDArray[np.int32]
+    """``(n_robots, 2) int32`` the cells of the robots assigned to."""
+    fields: Callable[[], list[NDArray[np.float32]]]
+    """Each robot's distance field on the planning grid, computed once, on the first call."""
+    current: Sequence[NDArray[np.int32]] | None
+    """Each robot's current route (its goal first; empty for none)."""
+    resolution_m: float
 
 
 @dataclass(frozen=True)
@@ -213,21 +232,11 @@ class ExplorationPipeline:
         """The grid paths are planned on (the centre's; the oracle plans on the truth)."""
         return state
 
-    def candidates(
-        self,
-        state: StateGrid,
-        frontiers: Frontiers,
-        blacklist: BoolGrid | None,
-        robots_rc: NDArray[np.int32],
-        fields: Callable[[], list[NDArray[np.float32]]],
-        current: Sequence[NDArray[np.int32]] | None,
-        resolution_m: float,
-    ) -> CandidateSet:
-        """Layer 1's candidates: F_un (less blacklisted cells) clustered by Mean-Shift (paper IV-A).
-        ``fields()`` gives each robot's distance field on the planning grid (computed once, on demand)."""
-        un_rc = frontiers.un_rc
-        if blacklist is not None and len(un_rc):
-            un_rc = un_rc[~blacklist[un_rc[:, 0], un_rc[:, 1]]]
+    def candidates(self, q: CandidateQuery) -> CandidateSet:
+        """Layer 1's candidates: F_un (less blacklisted cells) clustered by Mean-Shift (paper IV-A)."""
+        un_rc = q.frontiers.un_rc
+        if q.blacklist is not None and len(un_rc):
+            un_rc = un_rc[~q.blacklist[un_rc[:, 0], un_rc[:, 1]]]
         return CandidateSet(cluster_frontiers(un_rc, self.preprocess))
 
     def route(self, i: int, k: int, problem: AssignmentProblem, work: _Posed) -> NDArray[np.int32]:
@@ -272,7 +281,9 @@ class ExplorationPipeline:
                 computed.append(distance_fields(passable, robots_rc))
             return computed[0]
 
-        cand = self.candidates(state, frontiers, blacklist, robots_rc, fields_now, current, resolution_m)
+        cand = self.candidates(
+            CandidateQuery(state, frontiers, blacklist, robots_rc, fields_now, current, resolution_m)
+        )
         clusters = cand.clusters
         n = len(robots_rc)
         if cand.ended is not None:
@@ -371,32 +382,25 @@ class CoScanPipeline(ExplorationPipeline):
 
     coscan: CoScanConfig = field(default_factory=CoScanConfig)
 
-    def candidates(
-        self,
-        state: StateGrid,
-        frontiers: Frontiers,
-        blacklist: BoolGrid | None,
-        robots_rc: NDArray[np.int32],
-        fields: Callable[[], list[NDArray[np.float32]]],
-        current: Sequence[NDArray[np.int32]] | None,
-        resolution_m: float,
-    ) -> CandidateSet:
+    def candidates(self, q: CandidateQuery) -> CandidateSet:
         """Tasks sampled on F_un, capped by reachability, clustered by robot-seeded geodesic Lloyd
         iterations; each cluster's centre is its centroid task."""
-        un = _denoised_un(frontiers, blacklist, self.preprocess.min_cluster_size)
-        n = len(robots_rc)
-        tasks = sample_tasks(np.argwhere(un), self.coscan.task_spacing_m / resolution_m)
+        un = _denoised_un(q.frontiers, q.blacklist, self.preprocess.min_cluster_size)
+        n = len(q.robots_rc)
+        tasks = sample_tasks(np.argwhere(un), self.coscan.task_spacing_m / q.resolution_m)
         if len(tasks) == 0:
             return CandidateSet(Clusters.empty(), "no_frontiers")
-        passable = state == CellState.FREE
-        d_robots = np.stack([distances_at(f, tasks) for f in fields()])
+        passable = q.state == CellState.FREE
+        d_robots = np.stack([distances_at(f, tasks) for f in q.fields()])
         keep = cap_tasks(d_robots.min(axis=0), self.coscan.tasks_per_robot * n)
         if len(keep) == 0:
             return CandidateSet(Clusters.empty(), "no_reachable_frontiers")
         tasks, d_robots = tasks[keep], d_robots[:, keep]
         d_tasks = distance_matrix(passable, tasks, tasks)
         d_tasks = np.minimum(d_tasks, d_tasks.T)  # equal up to float rounding; keep it symmetric
-        lloyd = lloyd_clusters(tasks, d_tasks, d_robots, self.coscan.delta_m / resolution_m, self.coscan.max_iterations)
+        lloyd = lloyd_clusters(
+            tasks, d_tasks, d_robots, self.coscan.delta_m / q.resolution_m, self.coscan.max_iterations
+        )
         sizes = np.bincount(lloyd.labels, minlength=len(lloyd.centroids)).astype(np.int32)
         clusters = Clusters(tasks[lloyd.centroids], sizes, tasks, lloyd.labels.astype(np.int32))
         return CandidateSet(clusters, context=_CoScanTasks(tasks, d_robots, d_tasks, lloyd.labels))
@@ -418,19 +422,10 @@ class NcmPipeline(ExplorationPipeline):
     every robot pick a node; robots drive to their node. Where no frontier cell keeps clear of obstacles
     (passages under 0.4 m wide) the plain F_un cells are pooled instead."""
 
-    def candidates(
-        self,
-        state: StateGrid,
-        frontiers: Frontiers,
-        blacklist: BoolGrid | None,
-        robots_rc: NDArray[np.int32],
-        fields: Callable[[], list[NDArray[np.float32]]],
-        current: Sequence[NDArray[np.int32]] | None,
-        resolution_m: float,
-    ) -> CandidateSet:
-        un = _denoised_un(frontiers, blacklist, self.preprocess.min_cluster_size)
-        clear = ncm_frontier(state, Frontiers(un, frontiers.occ_mask), resolution_m)
-        nodes = pool_nodes(clear if clear.any() else un, resolution_m)
+    def candidates(self, q: CandidateQuery) -> CandidateSet:
+        un = _denoised_un(q.frontiers, q.blacklist, self.preprocess.min_cluster_size)
+        clear = ncm_frontier(q.state, Frontiers(un, q.frontiers.occ_mask), q.resolution_m)
+        nodes = pool_nodes(clear if clear.any() else un, q.resolution_m)
         labels = np.arange(len(nodes), dtype=np.int32)
         return CandidateSet(Clusters(nodes, np.ones(len(nodes), np.int32), nodes, labels))
 
@@ -464,22 +459,14 @@ class OraclePipeline(ExplorationPipeline):
             raise MrExploreError("the oracle needs the ground truth: call prepare() before decide()")
         return self._truth_state
 
-    def candidates(
-        self,
-        state: StateGrid,
-        frontiers: Frontiers,
-        blacklist: BoolGrid | None,
-        robots_rc: NDArray[np.int32],
-        fields: Callable[[], list[NDArray[np.float32]]],
-        current: Sequence[NDArray[np.int32]] | None,
-        resolution_m: float,
-    ) -> CandidateSet:
+    def candidates(self, q: CandidateQuery) -> CandidateSet:
         """Each robot's route is one candidate, owned by that robot: the plan at the first decision, what
         is left of it later."""
         if self._plan is None:
             raise MrExploreError("the oracle needs the ground truth: call prepare() before decide()")
+        current = q.current
         routes = list(current) if current is not None and any(len(c) for c in current) else self._plan
-        self._plan = [_NO_ROUTE] * len(robots_rc)
+        self._plan = [_NO_ROUTE] * len(q.robots_rc)
         owners = np.array([i for i, r in enumerate(routes) if len(r)], dtype=np.int64)
         if len(owners) == 0:
             return CandidateSet(Clusters.empty(), "plan_done")

@@ -134,7 +134,7 @@ def test_a_new_strategy_supplies_candidates_without_touching_the_decision() -> N
     from mrexplore.strategies import CandidateSet, ExplorationPipeline
 
     class TwoCells(ExplorationPipeline):
-        def candidates(self, state, frontiers, blacklist, robots_rc, fields, current, resolution_m):
+        def candidates(self, q):
             cells = np.array([[1, 1], [1, 7]], np.int32)
             return CandidateSet(Clusters(cells, np.ones(2, np.int32), cells, np.arange(2, dtype=np.int32)))
 

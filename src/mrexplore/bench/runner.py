@@ -227,10 +227,6 @@ def _check_columns(path: Path) -> None:
         )
 
 
-def _append(path: Path, row: dict[str, Any]) -> None:
-    append_row(path, COLUMNS, row)
-
-
 def _check_settings(folder: Path, specs: Sequence[EpisodeSpec], rows: list[dict[str, str]]) -> None:
     """One folder, one set of settings: refuse others, naming the fields that differ; write settings.yaml."""
     wanted = {s.settings for s in specs}
@@ -315,7 +311,7 @@ def run_bench(
         _run_ray(todo, results_csv, workers, ray_address, bar)
     elif workers == 1:
         for s in todo:
-            _append(results_csv, run_episode(s))
+            append_row(results_csv, COLUMNS, run_episode(s))
             bar.update()
     else:
         # Episodes already fill the cores: each worker's kernels run on as many threads as are left over.
@@ -326,7 +322,7 @@ def run_bench(
             while pending:
                 finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                 for fut in finished:
-                    _append(results_csv, fut.result())
+                    append_row(results_csv, COLUMNS, fut.result())
                     bar.update()
         except BaseException:
             stop_pool(pool)  # a kill, an interrupt or a failed episode: no worker runs on
@@ -374,7 +370,7 @@ def _run_ray(todo: list[EpisodeSpec], results_csv: Path, workers: int, address: 
         while pending:
             finished, pending = ray.wait(pending, num_returns=1)
             for ref in finished:
-                _append(results_csv, ray.get(ref))
+                append_row(results_csv, COLUMNS, ray.get(ref))
                 bar.update()
     finally:
         if started:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import time
 import zlib
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -147,20 +147,9 @@ class TransmissionTotals:
     def as_measures(self) -> dict[str, float | int]:
         """Flat fields for an episode record."""
         iou = np.asarray(self.iou) if self.iou else np.ones(1)
+        counts = {k: v for k, v in asdict(self).items() if k != "iou"}
         return {
-            "rounds": self.rounds,
-            "bytes_grid": self.bytes_grid,
-            "bytes_grid_zlib": self.bytes_grid_zlib,
-            "bytes_grid_delta_zlib": self.bytes_grid_delta_zlib,
-            "bytes_sparse": self.bytes_sparse,
-            "bytes_sparse_delta": self.bytes_sparse_delta,
-            "messages_sent": self.messages_sent,
-            "messages_lost": self.messages_lost,
-            "messages_resent": self.messages_resent,
-            "acks_lost": self.acks_lost,
-            "bytes_lost": self.bytes_lost,
-            "bytes_resent": self.bytes_resent,
-            "centre_restarts": self.centre_restarts,
+            **counts,
             "reconstruction_iou_min": round(float(iou.min()), 6),
             "reconstruction_iou_mean": round(float(iou.mean()), 6),
         }
