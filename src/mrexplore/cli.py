@@ -296,6 +296,13 @@ def _run_config(args: argparse.Namespace) -> RunConfig:
     return replace(run, map=map_cfg, sim=sim, mission=mission, global_planning=gp)
 
 
+def _check_failures(run: RunConfig, n: int) -> None:
+    """Refuse, before any work, a robot failure of a robot outside a team of ``n``."""
+    for robot, _ in run.mission.faults.robot_failures:
+        if robot >= n:
+            raise MrExploreError(f"--robot-failure names robot {robot}, but a team of {n} has robots 0..{n - 1}")
+
+
 def _check_output(path: str | None, flag: str, folder: bool = False) -> None:
     """Refuse, before any work, an output path that cannot be written."""
     if path is None:
@@ -325,12 +332,8 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
         raise MrExploreError(f"--robots names a team size twice ({args.robots}); give each size once")
     for n in robots:
         SimConfig(robots=n)
-        for robot, _ in run.mission.faults.robot_failures:
-            if robot >= n:
-                raise MrExploreError(f"--robot-failure names robot {robot}, but a team of {n} has robots 0..{n - 1}")
+        _check_failures(run, n)
     _check_output(args.out, "--out", folder=True)
-    for name in strategies:
-        make_strategy(name, policy=args.policy)  # unknown names and unreadable policies fail before any work
     maps = expand_maps(args.maps)
     specs = [
         EpisodeSpec(m, s, n, seed, run, args.policy)
@@ -393,10 +396,7 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
     _check_output(args.gif, "--gif")
     _check_output(args.png, "--png")
     _check_output(args.save_map, "--save-map")
-    for robot, _ in mission_cfg.faults.robot_failures:
-        if robot >= sim_cfg.robots:
-            n = sim_cfg.robots
-            raise MrExploreError(f"--robot-failure names robot {robot}, but a team of {n} has robots 0..{n - 1}")
+    _check_failures(run, sim_cfg.robots)
     truth = load_map(args.map, map_cfg)
     starts = None
     if args.start:
