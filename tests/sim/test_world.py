@@ -55,6 +55,15 @@ def test_collision_stops_robot_and_reports_blocked() -> None:
     assert res.blocked[0] and sim.positions_rc[0].tolist() == [1, 1]
 
 
+def test_a_failed_robots_belief_blocks_no_path() -> None:
+    sim = _sim(CORRIDOR, [[1, 1], [2, 8]])
+    sim.set_path(0, np.array([[1, 1], [1, 2], [1, 3], [1, 4]]))
+    sim.beliefs[1].log_odds[1, 3] = 5.0  # robot 1 alone believes a cell of robot 0's path occupied
+    assert sim.path_ahead_blocked(0)
+    sim.fail(1)  # its belief never reaches the centre again: robot 0 drives on and sees for itself
+    assert not sim.path_ahead_blocked(0)
+
+
 def test_path_must_start_at_robot() -> None:
     sim = _sim(CORRIDOR, [[1, 1]])
     with pytest.raises(ValueError, match=r"path of robot 0 must start at its cell \[1, 1\]"):

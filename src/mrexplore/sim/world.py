@@ -180,12 +180,14 @@ class ExplorationSim:
         return self.robot_known_cells / self.n_explorable
 
     def path_ahead_blocked(self, robot: int) -> bool:
-        """Whether any remaining cell of ``robot``'s path is believed occupied by the team."""
+        """Whether any remaining cell of ``robot``'s path is believed occupied by the team's live robots (a
+        failed robot's last scans never reach anyone: counting them would stop a robot before a wall the
+        centre, which plans the path, cannot know of, decision after decision)."""
         ahead = self.remaining_path(robot)[1:]
         if len(ahead) == 0:
             return False
         thr = logit(self.cfg.sensor.p_occupied)
         total = np.zeros(len(ahead), dtype=np.float32)
-        for b in self.beliefs:
-            total += b.log_odds[ahead[:, 0], ahead[:, 1]]
+        for i in np.flatnonzero(self.alive):
+            total += self.beliefs[i].log_odds[ahead[:, 0], ahead[:, 1]]
         return bool(np.any(total > thr))
