@@ -13,7 +13,6 @@ import math
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
 
 from mrexplore.preprocessing.frontiers import Frontiers
 from mrexplore.types import BoolGrid, CellState, StateGrid
@@ -39,13 +38,28 @@ def ncm_frontier(
     >>> ncm_frontier(g, detect_frontiers(g), 0.1, 0.2).astype(int).tolist()  # (r, 3): 0.2 m from the wall
     [[0, 0, 0, 1, 0], [0, 0, 0, 1, 0], [0, 0, 0, 1, 0]]
     """
-    r = math.ceil(clearance_m / resolution_m - 1e-9)
-    occupied = state == CellState.OCCUPIED
-    if r > 0 and occupied.any():
-        # Euclidean distance in cells to the nearest obstacle; "within" means <= clearance.
-        near = ndimage.distance_transform_edt(~occupied) <= clearance_m / resolution_m + 1e-9
-        return frontiers.un_mask & ~near
-    return frontiers.un_mask.copy()
+    out = frontiers.un_mask.copy()
+    reach = clearance_m / resolution_m + 1e-9
+    r = math.floor(reach)
+    rc = np.argwhere(out)
+    if r < 1 or len(rc) == 0:
+        return out
+    # Only the frontier cells are tested: for each offset within the clearance disk, is the cell there an
+    # obstacle? (The same cells as a Euclidean distance transform of the whole grid thresholded at the
+    # clearance, at a tiny share of its cost on a large grid.)
+    H, W = state.shape
+    near = np.zeros(len(rc), dtype=bool)
+    for dr in range(-r, r + 1):
+        for dc in range(-r, r + 1):
+            if dr * dr + dc * dc > reach * reach:
+                continue
+            rr, cc = rc[:, 0] + dr, rc[:, 1] + dc
+            inside = (rr >= 0) & (rr < H) & (cc >= 0) & (cc < W)
+            hit = np.zeros(len(rc), dtype=bool)
+            hit[inside] = state[rr[inside], cc[inside]] == CellState.OCCUPIED
+            near |= hit
+    out[rc[near, 0], rc[near, 1]] = False
+    return out
 
 
 def pool_nodes(frontier: BoolGrid, resolution_m: float, pool_m: float = POOL_M) -> NDArray[np.int32]:
