@@ -9,7 +9,8 @@ __all__ = ["plot_learning_curve"]
 
 
 def plot_learning_curve(log_csv: Path, png: Path) -> bool:
-    """Validation steps and coverage per stage, with the expert's agreement and gain on the way; returns
+    """Validation steps per stage (deterministic, and sampled where logged), with the expert's agreement and
+    gain on the way, or the training episodes' steps and return for a run without an expert; returns
     False (writing nothing) where matplotlib is not installed."""
     try:
         import matplotlib
@@ -28,16 +29,29 @@ def plot_learning_curve(log_csv: Path, png: Path) -> bool:
 
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
     ax1.plot(x, col("val_steps_mean"), "o-", color="tab:blue", label="validation steps (mean, deterministic)")
-    ax1.axhline(col("val_steps_mean")[0], color="grey", ls="--", lw=1, label="heuristic start (hier-heuristic)")
+    sampled = col("val_sampled_steps_mean")
+    has_sampled = any(v == v for v in sampled)  # NaN is the only value unequal to itself
+    if has_sampled:
+        ax1.plot(x, sampled, "D-", color="tab:orange", label="validation steps (mean, sampled)")
+    start = "untrained start" if has_sampled else "heuristic start (hier-heuristic)"
+    ax1.axhline(col("val_steps_mean")[0], color="grey", ls="--", lw=1, label=start)
     ax1.set_ylabel("steps")
     ax1.legend(loc="upper right", fontsize=8)
     ax1.set_title(f"training run {Path(log_csv).parent.name}")
-    ax2.plot(x, col("expert_agreement"), "s-", color="tab:green", label="expert agreement (training data)")
-    ax2.set_ylabel("share")
-    ax2.set_ylim(0, 1)
-    ax3 = ax2.twinx()
-    ax3.plot(x, col("expert_gain"), "^-", color="tab:red", label="expert gain over student (eq. 9 return)")
-    ax3.set_ylabel("return")
+    agreement = col("expert_agreement")
+    if any(v == v for v in agreement):
+        ax2.plot(x, agreement, "s-", color="tab:green", label="expert agreement (training data)")
+        ax2.set_ylabel("share")
+        ax2.set_ylim(0, 1)
+        ax3 = ax2.twinx()
+        ax3.plot(x, col("expert_gain"), "^-", color="tab:red", label="expert gain over student (eq. 9 return)")
+        ax3.set_ylabel("return")
+    else:  # PPO alone: what the sampled training episodes did
+        ax2.plot(x, col("steps_mean"), "s-", color="tab:green", label="training episodes: steps (sampled)")
+        ax2.set_ylabel("steps")
+        ax3 = ax2.twinx()
+        ax3.plot(x, col("return_mean"), "^-", color="tab:red", label="training episodes: return")
+        ax3.set_ylabel("return")
     lines = ax2.get_lines() + ax3.get_lines()
     ax2.legend(lines, [ln.get_label() for ln in lines], loc="lower right", fontsize=8)
     ax2.set_xticks(x, stages, rotation=30)
