@@ -17,6 +17,7 @@ import numpy as np
 from mrexplore.bench.report import write_report
 from mrexplore.bench.runner import EpisodeSpec, expand_maps, run_bench
 from mrexplore.config import (
+    TRAINABLE,
     FaultConfig,
     MapConfig,
     MissionConfig,
@@ -45,7 +46,10 @@ CONFIG_HEADER = (
 )
 DEFAULT_STRATEGY = "hier"
 COMMITMENT_HELP = "goal hysteresis in [0, 1] (1: none; default: 0.5 for nearest/utility, 1 for hier)"
-POLICY_HELP = "weights of the learned strategy (hier), written by 'mrexplore train' (default: the shipped policy)"
+POLICY_HELP = (
+    "weights of the learned strategies (hier, ncm), written by 'mrexplore train': FILE, or KIND=FILE pairs "
+    "(hier=A.pt,ncm=B.pt) where a run has both (default: the shipped policies)"
+)
 DEFAULT_TRAIN_MAPS = Path("..") / "shared" / "maps" / "train"
 MIN_REPLAN_HELP = (
     "steps a robot whose goal was seen drives on before the team replans "
@@ -234,8 +238,17 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("--min-replan-steps", type=_COUNT, default=None, help=MIN_REPLAN_HELP)
     _add_config_flags(be, "flags override it; the resume key holds every setting")
     _add_progress(be)
-    tr = sub.add_parser("train", help="train the learned global layer (imitation of a lookahead expert, then PPO)")
+    tr = sub.add_parser(
+        "train",
+        help="train the learned global layer (imitation of a lookahead expert, then PPO) or the ncm baseline (PPO)",
+    )
     tr.add_argument("--out", required=True, help="folder for policy.pt, checkpoints, log.csv and stages.csv")
+    tr.add_argument(
+        "--strategy",
+        choices=TRAINABLE,
+        default=None,
+        help="what to train: hier (the paper's mGNN) or ncm (NeuralCoMapping); default: the config's, else hier",
+    )
     budget = tr.add_mutually_exclusive_group()
     budget.add_argument("--minutes", type=float, default=None, help="stop starting stages after this many minutes")
     budget.add_argument("--episodes", type=int, default=None, help="stop after this many training episodes")
@@ -353,6 +366,8 @@ def _train(args: argparse.Namespace) -> str:
     from mrexplore.global_planning.learned.trainer import train
 
     run = _run_config(args)
+    if args.strategy is not None:
+        run = replace(run, train=replace(run.train, strategy=args.strategy))
     if args.minutes is not None and not (math.isfinite(args.minutes) and args.minutes > 0):
         raise MrExploreError(f"--minutes must be > 0, got {args.minutes}")
     if args.episodes is not None and args.episodes < 1:
@@ -374,9 +389,10 @@ def _train(args: argparse.Namespace) -> str:
         sim=run.sim,
         mission=run.mission,
     )
-    best = min(result.stages, key=lambda r: r["val_steps_mean"] if r["stage"] == result.best_stage else float("inf"))
+    best = next(r for r in result.stages if r["stage"] == result.best_stage)
+    sampled = f", sampled {best['val_sampled_steps_mean']:.1f}" if best.get("val_sampled_steps_mean") else ""
     return (
-        f"kept stage {result.best_stage} (validation {best['val_steps_mean']:.1f} steps); "
+        f"kept stage {result.best_stage} (validation {best['val_steps_mean']:.1f} steps{sampled}); "
         f"wrote {result.policy_path} and {result.policy_path.parent / 'stages.csv'}"
     )
 

@@ -32,6 +32,8 @@ __all__ = [
     "MissionConfig",
     "LearnedConfig",
     "TrainConfig",
+    "NcmTrainConfig",
+    "TRAINABLE",
     "RunConfig",
     "config_to_dict",
     "config_from_dict",
@@ -432,10 +434,69 @@ class LearnedConfig(_Checked):
 
 
 @dataclass(frozen=True)
-class TrainConfig(_Checked):
-    """Training of the learned global layer: imitation of a lookahead expert (DAgger), then PPO on eq. 9."""
+class NcmTrainConfig(_Checked):
+    """PPO of the NeuralCoMapping baseline, with its public code's settings (Ye, Dong et al., CVPR 2022)."""
 
+    ppo_iterations: int = 40
+    """PPO iterations (stages ppo0...), >= 1."""
+    ppo_episodes: int = 8
+    """Episodes collected per iteration, >= 1."""
+    ppo_epochs: int = 4
+    """Passes over a batch, >= 1."""
+    lr: float = 5e-4
+    """Adam learning rate of the actor, > 0."""
+    critic_lr_ratio: float = 1.0
+    """The critic's learning rate is the actor's times this, > 0. NCM's is 0.05 for its CNN critic over
+    the maps; ours (:class:`~mrexplore.global_planning.learned.ncm_network.NcmCritic`) is a small MLP, and
+    a 60-minute run makes about 1,500 updates: at 0.05 x 5e-4 it would barely move from its start, leaving
+    the advantages to the returns alone."""
+    gamma: float = 0.99
+    """Discount per 25 simulation steps (NCM's decision; a decision of k steps discounts by gamma^(k/25)), in (0, 1]."""
+    gae_lambda: float = 0.95
+    """GAE tau, in [0, 1]."""
+    clip: float = 0.2
+    """PPO ratio clip, > 0."""
+    value_coef: float = 3.0
+    """Weight of the value loss, >= 0."""
+    entropy_coef: float = 1e-4
+    """Weight of the entropy bonus, >= 0."""
+    area_reward: float = 5e-3
+    """Reward per newly explored m^2, > 0."""
+    area_offset_m2: float = 4.0
+    """m^2 subtracted from a 25-step decision's new area (in proportion for other lengths), >= 0."""
+    select: str = "sampled"
+    """Which validation keeps a checkpoint (both are logged): ``sampled`` (NCM's own evaluation, each robot
+    drawing its node; seeded, so repeatable) or ``argmax``. A PPO policy is trained as a sampler: in a
+    50-minute run with ``argmax`` no checkpoint's argmax beat the untrained network's (508.8 validation
+    steps; 524-646 after), so the run kept the untrained network, while the sampled episodes fell from
+    1,199 to 566-930 steps (docs/results/train/ncm_argmax/)."""
+
+    def _validate(self) -> None:
+        for name in ("ppo_iterations", "ppo_episodes", "ppo_epochs"):
+            _require(getattr(self, name) >= 1, name, ">= 1", getattr(self, name))
+        for name in ("lr", "critic_lr_ratio", "clip", "area_reward"):
+            _require(getattr(self, name) > 0, name, "> 0", getattr(self, name))
+        for name in ("value_coef", "entropy_coef", "area_offset_m2"):
+            _require(getattr(self, name) >= 0, name, ">= 0", getattr(self, name))
+        _require(0 < self.gamma <= 1, "gamma", "in (0, 1]", self.gamma)
+        _require(0 <= self.gae_lambda <= 1, "gae_lambda", "in [0, 1]", self.gae_lambda)
+        _require(self.select in ("sampled", "argmax"), "select", "'sampled' or 'argmax'", self.select)
+
+
+TRAINABLE = ("hier", "ncm")
+"""Strategies ``mrexplore train`` trains."""
+
+
+@dataclass(frozen=True)
+class TrainConfig(_Checked):
+    """Training of a learned global layer: for ``hier``, imitation of a lookahead expert (DAgger), then PPO
+    on eq. 9; for ``ncm``, NeuralCoMapping's PPO (:class:`NcmTrainConfig`). Both share the map split,
+    episode settings, validation and checkpoints."""
+
+    strategy: str = "hier"
+    """What is trained: ``hier`` (the paper's mGNN) or ``ncm`` (the NeuralCoMapping baseline)."""
     learned: LearnedConfig = field(default_factory=LearnedConfig)
+    ncm: NcmTrainConfig = field(default_factory=NcmTrainConfig)
     resolution_m: float = 0.1
     """Cell size of training maps, metres, > 0."""
     robots_min: int = 2
@@ -503,6 +564,7 @@ class TrainConfig(_Checked):
     the expert while RL fine-tunes), >= 0."""
 
     def _validate(self) -> None:
+        _require(self.strategy in TRAINABLE, "strategy", "'hier' or 'ncm'", self.strategy)
         _require(self.resolution_m > 0, "resolution_m", "> 0 metres", self.resolution_m)
         _require(self.robots_min >= 1, "robots_min", ">= 1", self.robots_min)
         _require(

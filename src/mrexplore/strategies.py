@@ -30,6 +30,7 @@ __all__ = [
     "CandidateSet",
     "ExplorationPipeline",
     "STRATEGIES",
+    "policy_for",
     "make_strategy",
     "strategy_names",
     "NO_GOAL",
@@ -527,6 +528,27 @@ def _hier(
     return ExplorationPipeline("hier", planner, pp, LocalRouter(lp, pp), _commitment(gp, 1.0), policy=info)
 
 
+def _ncm_factory(
+    sample: bool,
+) -> Callable[[GlobalPlanningConfig, PreprocessConfig, LocalPlanningConfig, str | None], ExplorationPipeline]:
+    def make(
+        gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig, policy: str | None
+    ) -> ExplorationPipeline:
+        # NeuralCoMapping re-implemented: no hysteresis (it replans every robot every decision), no local
+        # layer (each robot drives to its node); torch is imported here only, as for hier.
+        from pathlib import Path
+
+        from mrexplore.global_planning.learned.checkpoint import load_ncm_policy
+        from mrexplore.global_planning.learned.ncm_network import NcmPlanner
+
+        name = "ncm-sampled" if sample else "ncm"
+        loaded = load_ncm_policy(Path(policy) if policy else None)
+        info = {"path": str(loaded.path), "sha256": loaded.sha256, "code_version": str(loaded.meta["code_version"])}
+        return NcmPipeline(name, NcmPlanner(loaded.net, sample=sample, name=name), pp, policy=info)
+
+    return make
+
+
 def _coscan(
     gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig, policy: str | None
 ) -> ExplorationPipeline:
@@ -547,13 +569,36 @@ STRATEGIES: dict[
     "nearest": _nearest,
     "utility": _utility,
     "coscan": _coscan,
+    "ncm": _ncm_factory(sample=False),
+    "ncm-sampled": _ncm_factory(sample=True),
     "oracle": _oracle,
 }
 """Strategy name -> factory of its pipeline (the last argument: a policy file for learned planners, None
 for the shipped one)."""
 
-LEARNED = ("hier",)
-"""Strategies with a network, which ``policy`` selects."""
+LEARNED = {"hier": "hier", "ncm": "ncm", "ncm-sampled": "ncm"}
+"""Strategies with a network, which ``policy`` selects -> the kind of policy file they read (``ncm`` and
+``ncm-sampled`` share one)."""
+
+
+def policy_for(name: str, policy: str | None) -> str | None:
+    """The policy file strategy ``name`` runs, from a ``--policy`` value: ``FILE`` (for every learned
+    strategy of the run) or ``KIND=FILE[,KIND=FILE]`` with KIND ``hier`` or ``ncm``; None: the shipped one.
+
+    Examples
+    --------
+    >>> policy_for("ncm-sampled", "hier=a.pt,ncm=b.pt"), policy_for("hier", "ncm=b.pt"), policy_for("hier", "c.pt")
+    ('b.pt', None, 'c.pt')
+    """
+    kind = LEARNED.get(name.removesuffix(NO_LOCAL_SUFFIX))
+    if policy is None or kind is None:
+        return None
+    kinds = set(LEARNED.values())
+    parts = [p.partition("=") for p in policy.split(",")]
+    if not all(sep and k in kinds for k, sep, _ in parts):
+        return policy  # a plain path (it may hold '=' or ',' of its own)
+    files = {k: v for k, _, v in parts}
+    return files.get(kind) or None
 
 
 def strategy_names() -> list[str]:
@@ -573,8 +618,8 @@ def make_strategy(
 
     ``local=False`` (or a ``-nolocal`` suffix on the name) removes the local layer: robots go to cluster
     centres, for ablations; the pipeline's name then carries the suffix. ``policy`` is the weights file
-    of a learned strategy (None: the policy shipped in the package); ``coscan_cfg`` sets CoScan-2D's task
-    sampling and clustering.
+    of a learned strategy, or ``KIND=FILE`` pairs (:func:`policy_for`; None: the policy shipped in the
+    package); ``coscan_cfg`` sets CoScan-2D's task sampling and clustering.
     """
     if name.endswith(NO_LOCAL_SUFFIX) and name.removesuffix(NO_LOCAL_SUFFIX) in STRATEGIES:
         name, local = name.removesuffix(NO_LOCAL_SUFFIX), False
@@ -584,7 +629,7 @@ def make_strategy(
         global_cfg or GlobalPlanningConfig(),
         preprocess_cfg or PreprocessConfig(),
         local_cfg or LocalPlanningConfig(),
-        policy,
+        policy_for(name, policy),
     )
     if not local and pipeline.local is not None:
         pipeline.local = None

@@ -86,3 +86,12 @@ def test_paired_table_pairs_episodes_of_the_same_map_team_and_seed() -> None:
     rows = [row("a", 0, 90), row("b", 0, 100), row("a", 1, 90), row("b", 1, 100), row("b", 2, 500)]
     table = paired_table(rows, "a", ["a", "b"])
     assert "| dungeon large | +10.0 [+10.0, +10.0] | +0.00 | 2 |" in table  # seed 2 has no pair
+
+
+def test_every_learned_strategy_gets_its_paired_section() -> None:
+    from mrexplore.bench.report import _focuses
+
+    assert _focuses(["coscan", "ncm", "ncm-sampled", "utility", "hier-nolocal"]) == [
+        "coscan", "ncm", "ncm-sampled", "hier-nolocal"
+    ]  # fmt: skip
+    assert _focuses(["hier", "hier-heuristic", "utility"]) == ["hier"]  # the learned report keeps one section

@@ -34,7 +34,7 @@ from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.maps.loaders import is_generator_spec, load_map
 from mrexplore.mission import run_mission
 from mrexplore.safe_yaml import load_yaml_file
-from mrexplore.strategies import LEARNED, NO_LOCAL_SUFFIX, make_strategy
+from mrexplore.strategies import LEARNED, NO_LOCAL_SUFFIX, make_strategy, policy_for
 from mrexplore.threads import THREADS_ENV
 from mrexplore.types import MrExploreError
 from mrexplore.workers import stop_pool, worker_pool
@@ -98,7 +98,8 @@ class EpisodeSpec:
     @property
     def policy_sha256(self) -> str:
         """sha256 of the policy a learned strategy runs ('' for the others)."""
-        return _policy_sha(self.policy) if _base_name(self.strategy) in LEARNED else ""
+        kind = LEARNED.get(_base_name(self.strategy))
+        return _policy_sha(kind, policy_for(self.strategy, self.policy)) if kind is not None else ""
 
     @property
     def key(self) -> tuple[str, str, int, int, str, str]:
@@ -110,10 +111,10 @@ def _base_name(strategy: str) -> str:
 
 
 @functools.lru_cache(maxsize=16)
-def _policy_sha(policy: str | None) -> str:
-    from mrexplore.global_planning.learned.checkpoint import default_policy_path, file_sha256
+def _policy_sha(kind: str, policy: str | None) -> str:
+    from mrexplore.global_planning.learned.checkpoint import default_ncm_policy_path, default_policy_path, file_sha256
 
-    path = Path(policy) if policy else default_policy_path()
+    path = Path(policy) if policy else (default_ncm_policy_path() if kind == "ncm" else default_policy_path())
     return file_sha256(path) if path.is_file() else ""
 
 

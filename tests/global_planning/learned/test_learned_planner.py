@@ -11,7 +11,7 @@ import torch
 
 from mrexplore.config import LearnedConfig, MapConfig, SimConfig
 from mrexplore.global_planning.classical import UtilityPlanner
-from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS, load_policy, save_policy
+from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS, default_policy_path, load_policy, save_policy
 from mrexplore.global_planning.learned.network import MultiGraphNet
 from mrexplore.global_planning.learned.policy import LearnedPlanner
 from mrexplore.global_planning.protocol import AssignmentProblem
@@ -108,3 +108,36 @@ def test_snapshot_restore_replays_exactly_and_pose_commit_equals_decide() -> Non
         if m2.pose() is not None:
             m2.commit()
     assert {k: v for k, v in m2.result().measures.to_dict().items() if k not in TIMING} == first
+
+
+def test_ncm_policy_round_trip_and_refusals(tmp_path: Path) -> None:
+    from mrexplore.global_planning.learned.checkpoint import load_ncm_policy
+    from mrexplore.global_planning.learned.ncm_network import NcmConfig, NcmNet
+
+    torch.manual_seed(0)
+    net = NcmNet(NcmConfig(hidden=16, blocks=2))
+    save_policy(tmp_path / "n.pt", net, {"stage": "ppo3"})
+    loaded = load_ncm_policy(tmp_path / "n.pt")
+    assert loaded.net.cfg == net.cfg and loaded.meta["meta"] == {"stage": "ppo3"}
+    for (k, a), (_, b) in zip(net.state_dict().items(), loaded.net.state_dict().items(), strict=True):
+        assert torch.equal(a, b), k
+    with pytest.raises(MrExploreError, match=r"is for the hier strategy, not ncm; pass one written by"):
+        load_ncm_policy(default_policy_path())
+    blob = torch.load(tmp_path / "n.pt", weights_only=True)
+    blob["ncm_config"]["hidden"] = 10**6
+    torch.save(blob, tmp_path / "huge.pt")
+    with pytest.raises(MrExploreError, match=r"does not fit this network \(network sizes out of range: "):
+        load_ncm_policy(tmp_path / "huge.pt")
+    blob["ncm_config"]["hidden"], blob["ncm_config"]["extra"] = 16, 1
+    torch.save(blob, tmp_path / "extra.pt")
+    with pytest.raises(MrExploreError, match=r"does not fit this network \(its network config has other fields\)"):
+        load_ncm_policy(tmp_path / "extra.pt")
+
+
+@pytest.mark.parametrize("name", ["ncm", "ncm-sampled"])
+def test_shipped_ncm_policy_loads_by_default_and_explores(name: str) -> None:
+    s = make_strategy(name)
+    assert s.policy is not None and s.policy["path"].endswith("pretrained/ncm.pt")
+    assert Path(s.policy["path"]).stat().st_size < 2_000_000
+    m = run_mission(load_map("generated:3", MapConfig(resolution_m=0.1)), s, SimConfig(robots=2), seed=1).measures
+    assert m.coverage >= 0.99 and m.done_reason == "no_frontiers"

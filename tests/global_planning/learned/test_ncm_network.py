@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pytest
 import torch
 
 from mrexplore.global_planning.learned.ncm_network import NcmBatch, NcmConfig, NcmNet
@@ -112,3 +113,72 @@ def test_the_ncm_pipeline_decides_on_pooled_nodes_and_explores_a_map() -> None:
         planner = NcmPlanner(NcmNet(), sample=sample)
         m = run_mission(truth, NcmPipeline("ncm", planner), SimConfig(robots=2), MissionConfig(max_steps=3000), seed=1)
         assert m.measures.done_reason == "no_frontiers" and m.measures.coverage >= 0.99
+
+
+def _problem(robots_rc: list[list[int]], centres_rc: list[list[int]], dist_cells: list[list[float]]):  # noqa: ANN202
+    import numpy as np
+
+    from mrexplore.global_planning.protocol import AssignmentProblem
+    from mrexplore.preprocessing.clustering import Clusters
+
+    centres = np.array(centres_rc, np.int32)
+    k = len(centres)
+    clusters = Clusters(centres, np.ones(k, np.int32), centres, np.arange(k, dtype=np.int32))
+    state = np.zeros((1, 1), np.uint8)  # the network reads no grid
+    return AssignmentProblem(np.array(robots_rc, np.int32), clusters, np.array(dist_cells, np.float64), 0.1, state)
+
+
+def test_window_masks_far_nodes_unless_a_robot_has_none_near() -> None:
+    """At 0.1 m cells: robot 0 has node 0 within its 24 m window (10 m) and nodes 1 and 2 beyond it (30 m,
+    60 m): only node 0. Robot 1's nearest node is 30 m away, so none is in its window: it may take any
+    reachable one (nodes 0 and 2; node 1 is unreachable)."""
+    import math
+
+    from mrexplore.global_planning.learned.ncm_network import ncm_inputs
+
+    inf = math.inf
+    p = _problem(
+        [[0, 0], [0, 900]],
+        [[0, 100], [0, 300], [0, 600]],  # 10 m, 30 m, 60 m from robot 0; 80 m, 60 m, 30 m from robot 1
+        [[100, 300, 600], [800, inf, 300]],
+    )
+    x = ncm_inputs(p)
+    assert x.allowed.tolist() == [[True, False, False], [True, False, True]]
+    assert x.dist[1, 1] == 0.0 and x.dist[0, 0] == pytest.approx(100 * 0.1 / 24.0)
+    assert x.robots_xy.tolist() == [[0.0, 0.0], [0.0, 90 / 24]]
+
+
+def test_critic_ignores_padding_and_log_prob_matches_the_policy() -> None:
+    import numpy as np
+
+    from mrexplore.global_planning.learned.ncm_network import (
+        NcmCritic,
+        NcmInputs,
+        NcmStep,
+        ncm_collate,
+        ncm_log_prob,
+    )
+    from mrexplore.global_planning.learned.ncm_policy import per_robot_log_prob
+
+    torch.manual_seed(4)
+
+    def inputs(m: int, n: int, seed: int) -> NcmInputs:
+        d = _decision(m, n, seed)
+        return NcmInputs(*(d[k].numpy() for k in ("robots_xy", "nodes_xy", "dist", "allowed")))
+
+    small, big = inputs(2, 3, 5), inputs(4, 7, 6)
+    critic = NcmCritic(hidden=8, extra=2).eval()
+    extra = torch.tensor([[0.5, 1.0], [0.0, 2.0]])
+    with torch.no_grad():
+        alone = critic(ncm_collate([small]), extra[:1])
+        both = critic(ncm_collate([small, big]), extra)
+    assert torch.allclose(alone, both[:1], atol=1e-6)
+    net = NcmNet(NcmConfig(hidden=16, blocks=1)).eval()
+    # robot 1 of the big decision got no node (as when it had none allowed): it adds nothing
+    targets = [np.array([0, 0]), np.array([0, -1, 0, 0])]
+    steps = [NcmStep(x, t, 0.0, 0.0, np.zeros(2, np.float32)) for x, t in zip((small, big), targets, strict=True)]
+    with torch.no_grad():
+        logp, ent = ncm_log_prob(net, steps)
+        logits = net(ncm_collate([big]))[0]
+    want = per_robot_log_prob(logits[[0, 2, 3]], torch.tensor([0, 0, 0]))
+    assert torch.allclose(logp[1], want, atol=1e-5) and (ent >= 0).all()

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 import torch
 
-from mrexplore.config import TrainConfig
+from mrexplore.config import NcmTrainConfig, TrainConfig
 from mrexplore.global_planning.learned.checkpoint import load_policy
 from mrexplore.global_planning.learned.trainer import LOG_COLUMNS, split_maps, train
 from mrexplore.types import MrExploreError
@@ -91,3 +91,71 @@ def test_training_episodes_take_the_run_settings_and_keep_faults_inside_the_team
     assert m.mission_cfg.max_steps == 77 and m.sim_cfg.robots == 2 and m.sim_cfg.sensor.range_m == 4.0
     assert m.mission_cfg.faults.robot_failures == ((0, 50),)  # robot 3 is not in a team of 2
     assert m.mission_cfg.faults.message_loss == 0.2
+
+
+NCM_TINY = TrainConfig(
+    strategy="ncm",
+    resolution_m=0.2,
+    robots_min=2,
+    robots_max=2,
+    max_steps=120,
+    val_maps=1,
+    ncm=NcmTrainConfig(ppo_iterations=2, ppo_episodes=1, ppo_epochs=1),
+)
+
+
+def test_ncm_trains_with_the_same_stages_logs_and_resume(tmp_path: Path) -> None:
+    from mrexplore.global_planning.learned.checkpoint import load_ncm_policy
+
+    out = tmp_path / "ncm"
+    first = train(NCM_TINY, out, None, episodes=1, workers=1, seed=5)
+    assert [r["stage"] for r in first.stages] == ["baseline", "ppo0"]
+    second = train(NCM_TINY, out, None, workers=1, seed=5, resume=True)
+    assert [r["stage"] for r in second.stages] == ["baseline", "ppo0", "ppo1"]
+    log = _rows(out / "log.csv")
+    assert [r["stage"] for r in log] == ["baseline", "ppo0", "ppo1"]
+    assert all(r["kl"] and r["entropy"] and r["value_loss"] and r["return_mean"] for r in log[1:])
+    assert all(float(r["val_sampled_steps_mean"]) > 0 and float(r["val_steps_mean"]) > 0 for r in log)
+    policy = load_ncm_policy(out / "policy.pt")  # the actor alone; the critic stays in state.pt
+    assert policy.meta["meta"]["stage"] == second.best_stage
+    assert policy.meta["meta"]["chosen_by"] == "val_sampled_steps_mean"  # NCM's own evaluation samples
+    best = min(second.stages, key=lambda r: r["val_sampled_steps_mean"])["val_sampled_steps_mean"]
+    assert policy.meta["meta"]["val_sampled_steps_mean"] == best
+    assert not any(k.startswith("critic") for k in policy.net.state_dict())
+    with pytest.raises(
+        MrExploreError,
+        match=r"is for the ncm strategy, not hier; pass one written by .mrexplore train --strategy hier.",
+    ):
+        load_policy(out / "policy.pt")
+
+
+def test_ncm_rewards_sum_to_its_area_formula() -> None:
+    """NCM's reward per decision of k steps is 5e-3 * (new m^2 - 4 k / 25); over an episode the rewards
+    sum to the same formula over the whole span from the first decision to the end."""
+    import numpy as np
+
+    from mrexplore.global_planning.learned.trainer import NcmActorCritic, _Job, _run_ncm, _weights
+
+    torch.manual_seed(0)
+    net = NcmActorCritic()
+    job = _Job("ppo", "generated:4", 2, 9, _weights(net), NCM_TINY)
+    out = _run_ncm(job, net.eval())
+    rec, rewards = out["steps_rec"], out["rewards"]
+    assert len(rec) == len(rewards) == len(out["discounts"]) == out["decisions"] > 1
+    assert all(0 < d <= 1 for d in out["discounts"][:-1])
+    # the same episode again, counting area and steps from the first decision on
+    from mrexplore.global_planning.learned.ncm_network import NcmPlanner
+    from mrexplore.global_planning.learned.trainer import _mission, _ncm_pipeline
+
+    planner = NcmPlanner(net.actor, sample=True, critic=net.critic, record=[])
+    m = _mission(job, _ncm_pipeline(planner))
+    first: tuple[int, int] | None = None
+    while m.advance():
+        planner.value_extra = np.zeros(4, np.float32)
+        if m.pose() is None:
+            continue
+        first = first or (m.sim.known_cells, m.steps)
+        m.commit()
+    area_m2 = (m.sim.known_cells - first[0]) * 0.2**2
+    assert m.steps == out["steps"]
+    assert rewards.sum() == pytest.approx(5e-3 * (area_m2 - 4 * (m.steps - first[1]) / 25), rel=1e-9)

@@ -19,14 +19,23 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
+from numpy.typing import NDArray
 from torch import Tensor, nn
 
-from mrexplore.global_planning.learned.ncm_policy import per_robot_argmax, per_robot_sample
+from mrexplore.global_planning.learned.ncm_policy import (
+    per_robot_argmax,
+    per_robot_entropy,
+    per_robot_log_prob,
+    per_robot_sample,
+)
 from mrexplore.global_planning.learned.sinkhorn import log_optimal_transport
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 from mrexplore.threads import thread_count
 
-__all__ = ["NcmConfig", "NcmBatch", "NcmNet", "NcmPlanner", "ncm_batch", "WINDOW_M"]
+__all__ = [
+    "NcmConfig", "NcmBatch", "NcmNet", "NcmCritic", "NcmInputs", "NcmPlanner", "NcmStep", "ncm_batch",
+    "ncm_collate", "ncm_inputs", "ncm_log_prob", "WINDOW_M",
+]  # fmt: skip
 
 _MASKED = -1e9
 """Attention logit of a masked key: exp() underflows to 0 beside any real key, and stays finite."""
@@ -143,36 +152,115 @@ POSITION_SCALE_M = 24.0
 """Coordinates and distances enter the network divided by this."""
 
 
-def ncm_batch(problem: AssignmentProblem, window_m: float = WINDOW_M, scale_m: float = POSITION_SCALE_M) -> NcmBatch:
+@dataclass(frozen=True)
+class NcmInputs:
+    """One decision's input as plain arrays (what a PPO batch stores): robots_xy ``(m, 2)``, nodes_xy
+    ``(n, 2)``, dist ``(m, n)`` (0 where unreachable), allowed ``(m, n)`` bool, float32 but ``allowed``."""
+
+    robots_xy: NDArray[np.float32]
+    nodes_xy: NDArray[np.float32]
+    dist: NDArray[np.float32]
+    allowed: NDArray[np.bool_]
+
+
+def ncm_inputs(problem: AssignmentProblem, window_m: float = WINDOW_M, scale_m: float = POSITION_SCALE_M) -> NcmInputs:
     """The network's input for one decision: robots and candidate nodes (the problem's cluster centres) in
     metres over ``scale_m``, geodesic distances likewise, pairs allowed where reachable and within
-    ``window_m`` in a straight line."""
+    ``window_m`` in a straight line. A robot with no reachable node in its window may take any reachable
+    node (NCM's window is its local map; on a large floor the last frontiers can lie beyond every robot's
+    window, and a robot told nothing would stand still)."""
     res = problem.resolution_m
-    robots = torch.from_numpy(problem.robots_rc * res / scale_m).float()
-    nodes = torch.from_numpy(problem.clusters.centers_rc * res / scale_m).float()
-    d = torch.from_numpy(problem.dist_cells * res / scale_m).float()
-    reachable = torch.isfinite(d)
-    euclid = torch.cdist(robots, nodes) * scale_m
+    robots = (problem.robots_rc * res / scale_m).astype(np.float32)
+    nodes = (problem.clusters.centers_rc * res / scale_m).astype(np.float32)
+    d = (problem.dist_cells * res / scale_m).astype(np.float32)
+    reachable = np.isfinite(d)
+    euclid = np.sqrt(((robots[:, None, :] - nodes[None, :, :]) ** 2).sum(-1)) * scale_m
     allowed = reachable & (euclid <= window_m)
-    return NcmBatch(
-        robots[None],
-        nodes[None],
-        torch.where(reachable, d, torch.zeros_like(d))[None],
-        allowed[None],
-        torch.ones(1, len(robots), dtype=torch.bool),
-        torch.ones(1, len(nodes), dtype=torch.bool),
-    )
+    none_near = ~allowed.any(axis=1)
+    allowed[none_near] = reachable[none_near]
+    return NcmInputs(robots, nodes, np.where(reachable, d, 0.0).astype(np.float32), allowed)
+
+
+def ncm_collate(decisions: list[NcmInputs]) -> NcmBatch:
+    """Decisions padded to the largest team and node count (padding changes no output)."""
+    B = len(decisions)
+    R = max(d.robots_xy.shape[0] for d in decisions)
+    N = max(max(d.nodes_xy.shape[0] for d in decisions), 1)
+    robots_xy, nodes_xy = np.zeros((B, R, 2), np.float32), np.zeros((B, N, 2), np.float32)
+    dist, allowed = np.zeros((B, R, N), np.float32), np.zeros((B, R, N), bool)
+    robot_mask, node_mask = np.zeros((B, R), bool), np.zeros((B, N), bool)
+    for i, d in enumerate(decisions):
+        m, n = d.dist.shape
+        robots_xy[i, :m], nodes_xy[i, :n], dist[i, :m, :n], allowed[i, :m, :n] = (
+            d.robots_xy,
+            d.nodes_xy,
+            d.dist,
+            d.allowed,
+        )
+        robot_mask[i, :m], node_mask[i, :n] = True, True
+    t = torch.from_numpy
+    return NcmBatch(t(robots_xy), t(nodes_xy), t(dist), t(allowed), t(robot_mask), t(node_mask))
+
+
+def ncm_batch(problem: AssignmentProblem, window_m: float = WINDOW_M, scale_m: float = POSITION_SCALE_M) -> NcmBatch:
+    """:func:`ncm_inputs` of one decision as a batch of one."""
+    return ncm_collate([ncm_inputs(problem, window_m, scale_m)])
+
+
+class NcmCritic(nn.Module):
+    """The value of a decision, for PPO only. NCM's critic is a CNN over map channels; ours is smaller:
+    node features lifted by an MLP, mean- and max-pooled over robots and over nodes (masked), with the
+    node count and the trainer's privileged scalars (``extra`` of them: remaining area,
+    coverage, steps, team size), through an MLP."""
+
+    def __init__(self, hidden: int = 32, extra: int = 4) -> None:
+        super().__init__()
+        self.extra = extra
+        self.node_in = _mlp(4, hidden, hidden)
+        self.head = _mlp(4 * hidden + 1 + extra, 2 * hidden, 1)
+
+    def forward(self, b: NcmBatch, extra: Tensor) -> Tensor:
+        """``(B,)`` values; ``extra`` ``(B, extra)``."""
+        B, R, N = b.dist.shape
+        r = self.node_in(torch.cat([b.robots_xy, torch.tensor([0.0, 1.0]).expand(B, R, 2)], dim=-1))
+        f = self.node_in(torch.cat([b.nodes_xy, torch.tensor([1.0, 0.0]).expand(B, N, 2)], dim=-1))
+
+        def pooled(x: Tensor, mask: Tensor) -> list[Tensor]:
+            w = mask[..., None].float()
+            mean = (x * w).sum(1) / w.sum(1).clamp(min=1)
+            top = x.masked_fill(~mask[..., None], -1e9).max(1).values * mask.any(1, keepdim=True)
+            return [mean, top]
+
+        count = b.node_mask.float().sum(1, keepdim=True) / 100.0
+        return self.head(torch.cat([*pooled(r, b.robot_mask), *pooled(f, b.node_mask), count, extra], dim=-1))[:, 0]
+
+
+@dataclass(frozen=True)
+class NcmStep:
+    """One sampled decision, for PPO: the inputs, each robot's node (:data:`UNASSIGNED` for a robot with
+    none allowed), the joint log-probability, the critic's value and its scalars."""
+
+    inputs: NcmInputs
+    targets: NDArray[np.int64]
+    logp: float
+    value: float
+    extra: NDArray[np.float32]
 
 
 @dataclass
 class NcmPlanner:
     """NCM behind the :class:`~mrexplore.global_planning.protocol.GlobalPlanner` protocol: each robot takes
     the node of largest logit (``sample=False``, the deterministic variant) or draws its own (NCM's
-    evaluation), with the problem's generator. A robot with no allowed node gets none."""
+    evaluation), with the problem's generator. A robot with no allowed node gets none. With ``record``
+    (a list) and a ``critic``, each sampled decision is appended as an :class:`NcmStep` (training);
+    ``value_extra`` holds the critic's scalars for the next decision."""
 
     net: NcmNet
     sample: bool = False
     name: str = "ncm"
+    critic: NcmCritic | None = None
+    record: list[NcmStep] | None = None
+    value_extra: NDArray[np.float32] | None = None
 
     def __post_init__(self) -> None:
         if torch.get_num_threads() > thread_count():  # as LearnedPlanner: one mission per core in the bench
@@ -184,7 +272,10 @@ class NcmPlanner:
             return self.net(ncm_batch(problem))[0]
 
     def assign(self, problem: AssignmentProblem) -> Assignment:
-        logits = self.logits(problem)
+        inputs = ncm_inputs(problem)
+        batch = ncm_collate([inputs])
+        with torch.no_grad():
+            logits = self.net(batch)[0]
         ok = torch.isfinite(logits).any(dim=1)
         out = np.full(problem.n_robots, UNASSIGNED, dtype=np.int64)
         if not ok.any():
@@ -195,4 +286,25 @@ class NcmPlanner:
         else:
             picks = per_robot_argmax(logits[ok])
         out[ok.numpy()] = picks.numpy()
+        if self.record is not None:
+            if self.critic is None or self.value_extra is None:
+                raise ValueError("recording NCM decisions needs a critic and value_extra")
+            extra = np.asarray(self.value_extra, np.float32)
+            with torch.no_grad():
+                value = float(self.critic(batch, torch.from_numpy(extra)[None])[0])
+            logp = float(per_robot_log_prob(logits[ok], picks))
+            self.record.append(NcmStep(inputs, out.copy(), logp, value, extra))
         return Assignment(out)
+
+
+def ncm_log_prob(net: NcmNet, steps: list[NcmStep]) -> tuple[Tensor, Tensor]:
+    """``(B,)`` joint log-probabilities of the recorded targets under ``net`` and ``(B,)`` entropies (robots
+    with a target only; those the decision left without one add nothing)."""
+    logits = net(ncm_collate([s.inputs for s in steps]))
+    logps, ents = [], []
+    for i, s in enumerate(steps):
+        robots = torch.from_numpy(np.flatnonzero(s.targets != UNASSIGNED))
+        rows = logits[i, robots]
+        logps.append(per_robot_log_prob(rows, torch.from_numpy(s.targets[robots.numpy()])))
+        ents.append(per_robot_entropy(rows))
+    return torch.stack(logps), torch.stack(ents)

@@ -1,4 +1,5 @@
-"""Training of the learned global layer: the heuristic start, DAgger rounds on the lookahead expert, PPO.
+"""Training of the learned global layer: the heuristic start, DAgger rounds on the lookahead expert, PPO;
+and of the NeuralCoMapping baseline (``strategy: ncm``): its untrained network, then its PPO.
 
 The loop reads top to bottom (stages: baseline, dagger*, ppo*). Each stage collects episodes in worker
 processes (or Ray tasks), updates the network, validates it on held-out maps with deterministic
@@ -37,6 +38,14 @@ from mrexplore.global_planning.learned.expert import (
     privileged_scalars,
 )
 from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs
+from mrexplore.global_planning.learned.ncm_network import (
+    NcmCritic,
+    NcmNet,
+    NcmPlanner,
+    NcmStep,
+    ncm_collate,
+    ncm_log_prob,
+)
 from mrexplore.global_planning.learned.network import MultiGraphNet, collate
 from mrexplore.global_planning.learned.policy import (
     LearnedPlanner,
@@ -44,11 +53,11 @@ from mrexplore.global_planning.learned.policy import (
     assignment_score,
     sequential_log_prob,
 )
-from mrexplore.global_planning.learned.ppo import gae, listwise_loss, ppo_loss
+from mrexplore.global_planning.learned.ppo import PPOStats, gae, listwise_loss, ppo_loss
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission
-from mrexplore.strategies import ExplorationPipeline, make_strategy
+from mrexplore.strategies import ExplorationPipeline, NcmPipeline, make_strategy
 from mrexplore.threads import THREADS_ENV
 from mrexplore.types import MrExploreError
 from mrexplore.workers import stop_pool, worker_pool
@@ -57,8 +66,8 @@ __all__ = ["train", "validate_policy", "TrainResult", "split_maps", "LOG_COLUMNS
 
 LOG_COLUMNS = [
     "time_s", "stage", "episodes", "decisions", "labels", "loss", "expert_agreement", "expert_gain", "kl",
-    "clip_fraction", "entropy", "return_mean", "steps_mean", "coverage_mean", "val_steps_mean", "val_coverage_mean",
-    "decisions_per_s",
+    "clip_fraction", "entropy", "value_loss", "return_mean", "steps_mean", "coverage_mean", "val_steps_mean",
+    "val_coverage_mean", "val_sampled_steps_mean", "val_sampled_coverage_mean", "decisions_per_s",
 ]  # fmt: skip
 _VAL_SEED0 = 1_000_000
 """Procedural validation plans use seeds from here; training plans draw seeds below it."""
@@ -90,7 +99,8 @@ def _map(spec: str, resolution_m: float) -> GroundTruthMap:
 @dataclass(frozen=True)
 class _Job:
     kind: str
-    """"expert" (DAgger collection), "ppo" (sampled rollout) or "eval" (deterministic, None weights: heuristic)."""
+    """"expert" (DAgger collection), "ppo" (sampled rollout), "eval" (deterministic, None weights: heuristic)
+    or, for NCM, "eval-sampled" (its own evaluation: seeded per-robot draws)."""
     map_spec: str
     robots: int
     seed: int
@@ -106,14 +116,33 @@ class _Job:
     failures of robots beyond the team are left out."""
 
 
-def _weights(net: MultiGraphNet) -> bytes:
+class NcmActorCritic(torch.nn.Module):
+    """NCM's actor and our critic, trained together (one state dict, one optimiser with two learning rates);
+    only the actor is a policy file."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.actor = NcmNet()
+        self.critic = NcmCritic(extra=VALUE_INPUTS)
+
+
+def _new_net(cfg: TrainConfig) -> MultiGraphNet | NcmActorCritic:
+    return NcmActorCritic() if cfg.strategy == "ncm" else MultiGraphNet(cfg.learned, VALUE_INPUTS)
+
+
+def _policy_net(net: MultiGraphNet | NcmActorCritic) -> MultiGraphNet | NcmNet:
+    """What a policy file holds: the whole mGNN (its critic included), or NCM's actor alone."""
+    return net.actor if isinstance(net, NcmActorCritic) else net
+
+
+def _weights(net: torch.nn.Module) -> bytes:
     buf = io.BytesIO()
     torch.save(net.state_dict(), buf)
     return buf.getvalue()
 
 
-def _net_from(job: _Job) -> MultiGraphNet:
-    net = MultiGraphNet(job.cfg.learned, VALUE_INPUTS)
+def _net_from(job: _Job) -> MultiGraphNet | NcmActorCritic:
+    net = _new_net(job.cfg)
     if job.weights is not None:
         net.load_state_dict(torch.load(io.BytesIO(job.weights), weights_only=True))
     net.eval()
@@ -154,6 +183,8 @@ def _run_job(job: _Job) -> dict[str, Any]:
 
 def _run_episode(job: _Job) -> dict[str, Any]:
     net = _net_from(job)
+    if isinstance(net, NcmActorCritic):
+        return _run_ncm(job, net)
     if job.kind == "eval":
         m = _mission(job, _pipeline(LearnedPlanner(net) if job.weights is not None else None))
         decisions = 0
@@ -221,6 +252,60 @@ def _run_ppo(job: _Job, net: MultiGraphNet) -> dict[str, Any]:
         discounts.append(0.0 if ended_at_pose else cfg.gamma ** (m.steps - last_step))
     if m.done_reason != "max_steps" and discounts:
         discounts[-1] = 0.0  # explored: nothing follows
+    return {
+        "steps_rec": record,
+        "rewards": np.asarray(rewards),
+        "discounts": np.asarray(discounts),
+        **_episode_stats(m, len(record)),
+    }
+
+
+def _ncm_pipeline(planner: NcmPlanner) -> ExplorationPipeline:
+    """``ncm`` (or ``ncm-sampled``) with the given planner and the default preprocessing."""
+    return NcmPipeline(planner.name, planner)
+
+
+def _run_ncm(job: _Job, net: NcmActorCritic) -> dict[str, Any]:
+    """An NCM episode: evaluated (``eval``: argmax; ``eval-sampled``: each robot draws, from the mission's
+    seeded generator) or sampled and recorded for PPO (``ppo``), with NCM's
+    reward area_reward * (new m^2 - area_offset_m2 * k / 25) for a decision of k steps."""
+    ncfg = job.cfg.ncm
+    if job.kind in ("eval", "eval-sampled"):
+        m = _mission(job, _ncm_pipeline(NcmPlanner(net.actor, sample=job.kind == "eval-sampled")))
+        decisions = 0
+        while m.advance():
+            m.decide()
+            decisions += 1
+        return {"map": job.map_spec, **_episode_stats(m, decisions)}
+    record: list[NcmStep] = []
+    planner = NcmPlanner(net.actor, sample=True, critic=net.critic, record=record)
+    m = _mission(job, _ncm_pipeline(planner))
+    cell_m2 = job.cfg.resolution_m**2
+    rewards: list[float] = []
+    discounts: list[float] = []
+    last_known, last_step = m.sim.known_cells, m.steps
+
+    def close_interval() -> None:
+        k = m.steps - last_step
+        gained = (m.sim.known_cells - last_known) * cell_m2
+        rewards.append(ncfg.area_reward * (gained - ncfg.area_offset_m2 * k / 25.0))
+        discounts.append(ncfg.gamma ** (k / 25.0))
+
+    while m.advance():
+        planner.value_extra = privileged_scalars(m)
+        n_before = len(record)
+        if m.pose() is None:
+            continue  # the end (advance says so next), or a round where the centre heard nobody
+        if n_before:  # close the interval of the previous decision
+            close_interval()
+        m.commit()
+        last_known, last_step = m.sim.known_cells, m.steps
+        if len(record) == n_before:
+            raise MrExploreError("the sampling planner recorded no step")
+    if record:
+        close_interval()  # the last decision's interval: up to the end or the budget
+        if m.done_reason != "max_steps":
+            discounts[-1] = 0.0  # explored: nothing follows
     return {
         "steps_rec": record,
         "rewards": np.asarray(rewards),
@@ -377,22 +462,28 @@ def _fit_imitation(
     return float(np.mean(losses[-last:])), float(np.mean(agrees[-last:]))
 
 
-def _ppo_update(
-    net: MultiGraphNet,
+def _ppo(
+    net: torch.nn.Module,
     opt: torch.optim.Optimizer,
     trajectories: Sequence[dict[str, Any]],
-    data: Sequence[ExpertLabel],
-    cfg: TrainConfig,
+    reward_scale: float,
+    gae_lambda: float,
+    epochs: int,
     rng: np.random.Generator,
+    minibatch_loss: Callable[[list[Any], torch.Tensor, torch.Tensor], tuple[torch.Tensor, PPOStats]],
 ) -> dict[str, float]:
-    steps: list[PolicyStep] = []
+    """PPO epochs over the decisions of ``trajectories`` (each with ``steps_rec``, whose steps carry the
+    critic's ``value``; ``rewards``; ``discounts``): GAE per episode, advantages normalised over the batch,
+    minibatches of 64 in a random order; ``minibatch_loss(steps, advantages, returns)`` is the strategy's
+    loss. Returns the mean of each logged part."""
+    steps: list[Any] = []
     adv_all, ret_all = [], []
     for tr in trajectories:
-        rec: list[PolicyStep] = tr["steps_rec"]
+        rec = tr["steps_rec"]
         if not rec:
             continue
         values = np.array([s.value for s in rec])
-        adv, ret = gae(tr["rewards"] * cfg.reward_scale, values, tr["discounts"], 0.0, cfg.gae_lambda)
+        adv, ret = gae(tr["rewards"] * reward_scale, values, tr["discounts"], 0.0, gae_lambda)
         steps += rec
         adv_all.append(adv)
         ret_all.append(ret)
@@ -403,33 +494,12 @@ def _ppo_update(
     ret = np.concatenate(ret_all)
     net.train()
     stats: list[dict[str, float]] = []
-    for _ in range(cfg.ppo_epochs):
+    for _ in range(epochs):
         order = rng.permutation(len(steps))
         for s in range(0, len(order), _BATCH):
             idx = order[s : s + _BATCH]
-            mb = [steps[i] for i in idx]
-            batch = collate([st.inputs for st in mb])
-            R = batch.robots.shape[1]
-            aff, vr, vc = net(batch)
-            v_new = net.value_of(vr, vc, batch, torch.from_numpy(np.stack([x.extra for x in mb])))
-            o = torch.from_numpy(_pad_rows([st.order for st in mb], R, -1))
-            c = torch.from_numpy(_pad_rows([st.choices for st in mb], R, -1))
-            logp, ent = sequential_log_prob(aff, o, c)
-            loss, st = ppo_loss(
-                logp,
-                torch.tensor([x.logp for x in mb], dtype=torch.float32),
-                torch.from_numpy(adv[idx]).float(),
-                v_new,
-                torch.from_numpy(ret[idx]).float(),
-                ent,
-                cfg.clip,
-                cfg.value_coef,
-                cfg.entropy_coef,
-            )
-            if data and cfg.imitation_coef > 0:
-                pick = rng.choice(len(data), size=min(_BATCH, len(data)), replace=False)
-                im, _ = _imitation_loss(net, [data[i] for i in pick], cfg.return_temperature, cfg.residual_l2)
-                loss = loss + cfg.imitation_coef * im
+            t = torch.from_numpy
+            loss, st = minibatch_loss([steps[i] for i in idx], t(adv[idx]).float(), t(ret[idx]).float())
             opt.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0)
@@ -440,10 +510,71 @@ def _ppo_update(
                     "kl": st.approx_kl,
                     "clip_fraction": st.clip_fraction,
                     "entropy": st.entropy,
+                    "value_loss": st.value,
                 }
             )
     net.eval()
     return {k: float(np.mean([x[k] for x in stats])) for k in stats[0]}
+
+
+def _ppo_update(
+    net: MultiGraphNet,
+    opt: torch.optim.Optimizer,
+    trajectories: Sequence[dict[str, Any]],
+    data: Sequence[ExpertLabel],
+    cfg: TrainConfig,
+    rng: np.random.Generator,
+) -> dict[str, float]:
+    """hier's PPO on eq. 9 (sequential sampling's log-probability), with the listwise expert loss kept."""
+
+    def minibatch_loss(mb: list[PolicyStep], adv: torch.Tensor, ret: torch.Tensor) -> tuple[torch.Tensor, PPOStats]:
+        batch = collate([st.inputs for st in mb])
+        R = batch.robots.shape[1]
+        aff, vr, vc = net(batch)
+        v_new = net.value_of(vr, vc, batch, torch.from_numpy(np.stack([x.extra for x in mb])))
+        o = torch.from_numpy(_pad_rows([st.order for st in mb], R, -1))
+        c = torch.from_numpy(_pad_rows([st.choices for st in mb], R, -1))
+        logp, ent = sequential_log_prob(aff, o, c)
+        old = torch.tensor([x.logp for x in mb], dtype=torch.float32)
+        loss, st = ppo_loss(logp, old, adv, v_new, ret, ent, cfg.clip, cfg.value_coef, cfg.entropy_coef)
+        if data and cfg.imitation_coef > 0:
+            pick = rng.choice(len(data), size=min(_BATCH, len(data)), replace=False)
+            im, _ = _imitation_loss(net, [data[i] for i in pick], cfg.return_temperature, cfg.residual_l2)
+            loss = loss + cfg.imitation_coef * im
+        return loss, st
+
+    return _ppo(net, opt, trajectories, cfg.reward_scale, cfg.gae_lambda, cfg.ppo_epochs, rng, minibatch_loss)
+
+
+def _ncm_update(
+    net: NcmActorCritic,
+    opt: torch.optim.Optimizer,
+    trajectories: Sequence[dict[str, Any]],
+    cfg: TrainConfig,
+    rng: np.random.Generator,
+) -> dict[str, float]:
+    """NCM's PPO: per-robot categoricals' joint log-probability, its critic, its coefficients (rewards
+    already carry NCM's scale)."""
+    n = cfg.ncm
+
+    def minibatch_loss(mb: list[NcmStep], adv: torch.Tensor, ret: torch.Tensor) -> tuple[torch.Tensor, PPOStats]:
+        logp, ent = ncm_log_prob(net.actor, mb)
+        v_new = net.critic(ncm_collate([x.inputs for x in mb]), torch.from_numpy(np.stack([x.extra for x in mb])))
+        old = torch.tensor([x.logp for x in mb], dtype=torch.float32)
+        return ppo_loss(logp, old, adv, v_new, ret, ent, n.clip, n.value_coef, n.entropy_coef)
+
+    return _ppo(net, opt, trajectories, 1.0, n.gae_lambda, n.ppo_epochs, rng, minibatch_loss)
+
+
+def _optimizer(net: MultiGraphNet | NcmActorCritic, cfg: TrainConfig) -> torch.optim.Optimizer:
+    if isinstance(net, NcmActorCritic):
+        return torch.optim.Adam(
+            [
+                {"params": net.actor.parameters(), "lr": cfg.ncm.lr},
+                {"params": net.critic.parameters(), "lr": cfg.ncm.lr * cfg.ncm.critic_lr_ratio},
+            ]
+        )
+    return torch.optim.Adam(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
 
 
 # -- the run ----------------------------------------------------------------------------------------------
@@ -472,6 +603,8 @@ class TrainResult:
 
 
 def _stages(cfg: TrainConfig) -> list[str]:
+    if cfg.strategy == "ncm":
+        return ["baseline"] + [f"ppo{k}" for k in range(cfg.ncm.ppo_iterations)]
     return (
         ["baseline"] + [f"dagger{k}" for k in range(cfg.dagger_rounds)] + [f"ppo{k}" for k in range(cfg.ppo_iterations)]
     )
@@ -582,8 +715,8 @@ def train(
         raise MrExploreError(f"nothing to resume in {out} (no state.pt); drop --resume to start a run there")
     out.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(seed)
-    net = MultiGraphNet(cfg.learned, VALUE_INPUTS)
-    opt = torch.optim.Adam(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+    net = _new_net(cfg)
+    opt = _optimizer(net, cfg)
     st = _State()
     data: list[ExpertLabel] = []
     rng = np.random.default_rng(seed)
@@ -614,8 +747,8 @@ def train(
         def budget_left(n: int) -> int:
             return n if episodes is None else max(0, min(n, episodes - st.episodes))
 
-        def validate(weights: bytes | None) -> tuple[float, float]:
-            jobs = placed([_Job("eval", m, 3, i, weights, cfg) for i, m in enumerate(val_maps)])
+        def validate(weights: bytes | None, kind: str = "eval") -> tuple[float, float]:
+            jobs = placed([_Job(kind, m, 3, i, weights, cfg) for i, m in enumerate(val_maps)])
             res = list(runner.run(jobs, math.inf))
             return float(np.mean([r["steps"] for r in res])), float(np.mean([r["coverage"] for r in res]))
 
@@ -631,6 +764,14 @@ def train(
             if stage == "baseline":
                 # The untrained network is the heuristic (zero residual): its validation is the yardstick.
                 pass
+            elif isinstance(net, NcmActorCritic):
+                n = budget_left(cfg.ncm.ppo_episodes)
+                results = runner.results(placed(_episode_jobs("ppo", n, train_maps, cfg, rng, _weights(net))), deadline)
+                st.episodes += len(results)
+                row |= _collect_row(results) | {
+                    "return_mean": float(np.mean([r["rewards"].sum() for r in results])) if results else None
+                }
+                row |= _ncm_update(net, opt, results, cfg, rng)
             elif stage.startswith("dagger"):
                 # collect: the student drives, the expert labels its decisions
                 jobs = placed(
@@ -661,17 +802,23 @@ def train(
                     g["lr"] = cfg.ppo_lr
                 row |= _ppo_update(net, opt, results, data, cfg, rng)
             # validate (deterministic decoding, held-out maps) and keep the best
-            weights = None if stage == "baseline" else _weights(net)
+            # (hier's baseline is the heuristic, which None weights select; NCM's is its untrained network)
+            weights = None if stage == "baseline" and cfg.strategy == "hier" else _weights(net)
             row["val_steps_mean"], row["val_coverage_mean"] = validate(weights)
+            chosen_by = "val_steps_mean"
+            if cfg.strategy == "ncm":  # NCM's own evaluation samples: validate that too (seeded per map)
+                row["val_sampled_steps_mean"], row["val_sampled_coverage_mean"] = validate(weights, "eval-sampled")
+                chosen_by = "val_sampled_steps_mean" if cfg.ncm.select == "sampled" else chosen_by
+            cov_key = chosen_by.replace("steps", "coverage")
             if stage == "baseline" or (
-                row["val_steps_mean"] < st.best_val
-                and row["val_coverage_mean"] >= st.stage_rows[0]["val_coverage_mean"] - 0.005
+                row[chosen_by] < st.best_val and row[cov_key] >= st.stage_rows[0][cov_key] - 0.005
             ):
-                st.best_val, st.best_stage = row["val_steps_mean"], stage
+                st.best_val, st.best_stage = row[chosen_by], stage
+                meta = {k: row[k] for k in row if k.startswith("val_")}
                 save_policy(
                     out / "best.pt",
-                    net,
-                    {"stage": stage, "val_steps_mean": row["val_steps_mean"], "train_config": config_to_dict(cfg)},
+                    _policy_net(net),
+                    {"stage": stage, **meta, "chosen_by": chosen_by, "train_config": config_to_dict(cfg)},
                 )
             elapsed = time.perf_counter() - t0
             row["time_s"] = round(time.perf_counter() - t_start, 1)
@@ -689,12 +836,17 @@ def train(
                         "expert_agreement",
                         "val_steps_mean",
                         "val_coverage_mean",
+                        "val_sampled_steps_mean",
+                        "val_sampled_coverage_mean",
                         "time_s",
                     )
+                    if k in row or not k.startswith("val_sampled")
                 }
             )
             log.row(row, st.stage)
             val = f"{row['val_steps_mean']:.1f} steps, coverage {row['val_coverage_mean']:.4f}"
+            if "val_sampled_steps_mean" in row:
+                val += f"; sampled {row['val_sampled_steps_mean']:.1f} steps, {row['val_sampled_coverage_mean']:.4f}"
             say(f"{stage}: validation {val} ({elapsed:.0f} s)")
             # checkpoint: everything a resume needs, written atomically
             st.stage += 1
@@ -723,11 +875,16 @@ def validate_policy(
     policy: Path | None, cfg: TrainConfig, train_dir: Path | None, workers: int = 0
 ) -> tuple[float, float, list[int]]:
     """Mean validation steps and coverage (and the steps per validation map, in order) of a policy file
-    (None: the heuristic, hier-heuristic) on ``cfg``'s validation maps: to compare runs on one set."""
-    weights = None
-    if policy is not None:
-        from mrexplore.global_planning.learned.checkpoint import load_policy
+    (None: the heuristic, hier-heuristic; for ``cfg.strategy`` ncm, the shipped NCM policy) on ``cfg``'s
+    validation maps: to compare runs on one set."""
+    from mrexplore.global_planning.learned.checkpoint import load_ncm_policy, load_policy
 
+    weights = None
+    if cfg.strategy == "ncm":
+        both = NcmActorCritic()
+        both.actor.load_state_dict(load_ncm_policy(policy).net.state_dict())
+        weights = _weights(both)
+    elif policy is not None:
         weights = _weights(load_policy(policy).net)
     _, val_maps = split_maps(train_dir, cfg.val_maps)
     with _Runner(workers, None) as runner:
