@@ -129,6 +129,14 @@ def test_ncm_trains_with_the_same_stages_logs_and_resume(tmp_path: Path) -> None
         load_policy(out / "policy.pt")
 
 
+def test_ncm_trains_through_ray_as_through_processes(tmp_path: Path) -> None:
+    pytest.importorskip("ray", reason="Ray is the optional scale-out path: pip install 'mrexplore[ray]'")
+    local = train(NCM_TINY, tmp_path / "procs", None, episodes=1, workers=2, seed=5)
+    on_ray = train(NCM_TINY, tmp_path / "ray", None, episodes=1, workers=2, seed=5, ray_address="local")
+    keys = ("stage", "val_steps_mean", "val_sampled_steps_mean")
+    assert [[r[k] for k in keys] for r in on_ray.stages] == [[r[k] for k in keys] for r in local.stages]
+
+
 def test_ncm_rewards_sum_to_its_area_formula() -> None:
     """NCM's reward per decision of k steps is 5e-3 * (new m^2 - 4 k / 25); over an episode the rewards
     sum to the same formula over the whole span from the first decision to the end."""
