@@ -86,7 +86,7 @@ def test_given_starts(capsys) -> None:
         (
             ["--strategy", "greedy"],
             "mrexplore: error: unknown strategy 'greedy'; choose one of "
-            "hier, hier-heuristic, nearest, utility, coscan, ncm, ncm-sampled, oracle",
+            "hier, hier-heuristic, nearest, utility, coscan, ncm, ncm-sampled, ncm-matched, oracle",
         ),
         (
             ["--start", "0.01,0.01"],
@@ -199,7 +199,7 @@ def test_ncm_explores_and_benches_with_a_given_policy(tmp_path, capsys) -> None:
     torch.manual_seed(0)
     ncm = tmp_path / "ncm.pt"
     save_policy(ncm, NcmNet(), {"stage": "baseline"})
-    for name in ("ncm", "ncm-sampled"):
+    for name in ("ncm", "ncm-sampled", "ncm-matched"):
         assert main(["explore", *FAST, "--strategy", name, "--policy", str(ncm), "--json"]) == 0
         rec = json.loads(capsys.readouterr().out)
         assert rec["strategy"] == name and rec["coverage"] >= 0.99 and rec["policy"]["path"] == str(ncm)

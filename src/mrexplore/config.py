@@ -468,8 +468,8 @@ class NcmTrainConfig(_Checked):
     """Which validation keeps a checkpoint (both are logged): ``sampled`` (NCM's own evaluation, each robot
     drawing its node; seeded, so repeatable) or ``argmax``. A PPO policy is trained as a sampler: in a
     50-minute run with ``argmax`` no checkpoint's argmax beat the untrained network's (508.8 validation
-    steps; 524-646 after), so the run kept the untrained network, while the sampled episodes fell from
-    1,199 to 566-930 steps (docs/results/train/ncm_argmax/)."""
+    steps; 524-646 after), so the run kept the untrained network, while its sampled training episodes fell
+    from 1,132 steps (mean of the first 10 iterations) to 781 (last 10; docs/results/train/ncm_argmax/)."""
 
     def _validate(self) -> None:
         for name in ("ppo_iterations", "ppo_episodes", "ppo_epochs"):

@@ -529,7 +529,7 @@ def _hier(
 
 
 def _ncm_factory(
-    sample: bool,
+    name: str, sample: bool = False, match: bool = False
 ) -> Callable[[GlobalPlanningConfig, PreprocessConfig, LocalPlanningConfig, str | None], ExplorationPipeline]:
     def make(
         gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig, policy: str | None
@@ -541,10 +541,9 @@ def _ncm_factory(
         from mrexplore.global_planning.learned.checkpoint import load_ncm_policy
         from mrexplore.global_planning.learned.ncm_network import NcmPlanner
 
-        name = "ncm-sampled" if sample else "ncm"
         loaded = load_ncm_policy(Path(policy) if policy else None)
         info = {"path": str(loaded.path), "sha256": loaded.sha256, "code_version": str(loaded.meta["code_version"])}
-        return NcmPipeline(name, NcmPlanner(loaded.net, sample=sample, name=name), pp, policy=info)
+        return NcmPipeline(name, NcmPlanner(loaded.net, sample=sample, name=name, match=match), pp, policy=info)
 
     return make
 
@@ -569,16 +568,17 @@ STRATEGIES: dict[
     "nearest": _nearest,
     "utility": _utility,
     "coscan": _coscan,
-    "ncm": _ncm_factory(sample=False),
-    "ncm-sampled": _ncm_factory(sample=True),
+    "ncm": _ncm_factory("ncm"),
+    "ncm-sampled": _ncm_factory("ncm-sampled", sample=True),
+    "ncm-matched": _ncm_factory("ncm-matched", match=True),
     "oracle": _oracle,
 }
 """Strategy name -> factory of its pipeline (the last argument: a policy file for learned planners, None
 for the shipped one)."""
 
-LEARNED = {"hier": "hier", "ncm": "ncm", "ncm-sampled": "ncm"}
-"""Strategies with a network, which ``policy`` selects -> the kind of policy file they read (``ncm`` and
-``ncm-sampled`` share one)."""
+LEARNED = {"hier": "hier", "ncm": "ncm", "ncm-sampled": "ncm", "ncm-matched": "ncm"}
+"""Strategies with a network, which ``policy`` selects -> the kind of policy file they read (NCM's three
+decodings share one)."""
 
 
 def policy_for(name: str, policy: str | None) -> str | None:

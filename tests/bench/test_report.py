@@ -91,7 +91,7 @@ def test_paired_table_pairs_episodes_of_the_same_map_team_and_seed() -> None:
 def test_every_learned_strategy_gets_its_paired_section() -> None:
     from mrexplore.bench.report import _focuses
 
-    assert _focuses(["coscan", "ncm", "ncm-sampled", "utility", "hier-nolocal"]) == [
-        "coscan", "ncm", "ncm-sampled", "hier-nolocal"
+    assert _focuses(["coscan", "ncm", "ncm-sampled", "utility", "ncm-matched", "hier-nolocal"]) == [
+        "coscan", "ncm", "ncm-sampled", "ncm-matched", "hier-nolocal"
     ]  # fmt: skip
     assert _focuses(["hier", "hier-heuristic", "utility"]) == ["hier"]  # the learned report keeps one section

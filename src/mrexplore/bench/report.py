@@ -296,8 +296,9 @@ def write_plots(rows: list[Row], strategies: Sequence[str], out_dir: Path) -> li
 
 def _focuses(strategies: Sequence[str]) -> list[str]:
     """Strategies whose paired differences against every other are reported: the first listed, and every
-    learned one (hier, ncm, ncm-sampled), so a table of NCM's two variants holds both against the rest."""
-    learned = ("hier", "ncm", "ncm-sampled")
+    learned one (hier, ncm, ncm-sampled, ncm-matched), so a table of NCM's variants holds each against the
+    rest."""
+    learned = ("hier", "ncm", "ncm-sampled", "ncm-matched")
     return [s for i, s in enumerate(strategies) if i == 0 or s.removesuffix("-nolocal") in learned]
 
 

@@ -134,7 +134,7 @@ def test_ncm_policy_round_trip_and_refusals(tmp_path: Path) -> None:
         load_ncm_policy(tmp_path / "extra.pt")
 
 
-@pytest.mark.parametrize("name", ["ncm", "ncm-sampled"])
+@pytest.mark.parametrize("name", ["ncm", "ncm-sampled", "ncm-matched"])
 def test_shipped_ncm_policy_loads_by_default_and_explores(name: str) -> None:
     s = make_strategy(name)
     assert s.policy is not None and s.policy["path"].endswith("pretrained/ncm.pt")

@@ -182,3 +182,19 @@ def test_critic_ignores_padding_and_log_prob_matches_the_policy() -> None:
         logits = net(ncm_collate([big]))[0]
     want = per_robot_log_prob(logits[[0, 2, 3]], torch.tensor([0, 0, 0]))
     assert torch.allclose(logp[1], want, atol=1e-5) and (ent >= 0).all()
+
+
+def test_matched_decoding_spreads_robots_that_stand_together() -> None:
+    """Two robots in one cell have equal rows of the plan: argmax sends both to the same node for ever
+    (on Willow Garage two of three robots shared every goal from step 30 on); the matched decoding of the
+    same logits gives them different nodes, and a third robot shares once the two nodes are taken."""
+    from mrexplore.global_planning.learned.ncm_network import NcmPlanner
+
+    torch.manual_seed(5)
+    net = NcmNet().eval()
+    p = _problem([[0, 0], [0, 0]], [[0, 100], [0, 150]], [[100, 150], [100, 150]])
+    argmax = NcmPlanner(net).assign(p).cluster_of_robot.tolist()
+    assert argmax[0] == argmax[1]
+    assert sorted(NcmPlanner(net, match=True).assign(p).cluster_of_robot.tolist()) == [0, 1]
+    three = _problem([[0, 0], [0, 0], [0, 0]], [[0, 100], [0, 150]], [[100, 150]] * 3)
+    assert sorted(NcmPlanner(net, match=True).assign(three).cluster_of_robot.tolist()) in ([0, 0, 1], [0, 1, 1])

@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 from torch import Tensor, nn
 
 from mrexplore.global_planning.learned.ncm_policy import (
+    matched_targets,
     per_robot_argmax,
     per_robot_entropy,
     per_robot_log_prob,
@@ -250,14 +251,17 @@ class NcmStep:
 @dataclass
 class NcmPlanner:
     """NCM behind the :class:`~mrexplore.global_planning.protocol.GlobalPlanner` protocol: each robot takes
-    the node of largest logit (``sample=False``, the deterministic variant) or draws its own (NCM's
-    evaluation), with the problem's generator. A robot with no allowed node gets none. With ``record``
+    the node of largest logit (``sample=False``, the deterministic variant), draws its own (NCM's
+    evaluation), with the problem's generator, or (``match``, deterministic) the robots take the joint
+    choice of largest summed logit with every node used once before any is shared. A robot with no
+    allowed node gets none. With ``record``
     (a list) and a ``critic``, each sampled decision is appended as an :class:`NcmStep` (training);
     ``value_extra`` holds the critic's scalars for the next decision."""
 
     net: NcmNet
     sample: bool = False
     name: str = "ncm"
+    match: bool = False
     critic: NcmCritic | None = None
     record: list[NcmStep] | None = None
     value_extra: NDArray[np.float32] | None = None
@@ -283,6 +287,8 @@ class NcmPlanner:
         if self.sample:
             seed = int(problem.rng.integers(2**62)) if problem.rng is not None else 0
             picks = per_robot_sample(logits[ok], torch.Generator().manual_seed(seed))
+        elif self.match:
+            picks = matched_targets(logits[ok])
         else:
             picks = per_robot_argmax(logits[ok])
         out[ok.numpy()] = picks.numpy()

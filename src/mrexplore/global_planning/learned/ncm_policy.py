@@ -4,9 +4,19 @@ for the deterministic variant. The joint log-probability is the sum of the robot
 
 from __future__ import annotations
 
+import numpy as np
 import torch
 
-__all__ = ["robot_logits", "per_robot_log_prob", "per_robot_entropy", "per_robot_sample", "per_robot_argmax"]
+from mrexplore.global_planning.hungarian import match_min_cost
+
+__all__ = [
+    "robot_logits",
+    "per_robot_log_prob",
+    "per_robot_entropy",
+    "per_robot_sample",
+    "per_robot_argmax",
+    "matched_targets",
+]
 
 
 def robot_logits(log_plan: torch.Tensor, mask: torch.Tensor | None = None) -> torch.Tensor:
@@ -46,3 +56,20 @@ def per_robot_sample(logits: torch.Tensor, generator: torch.Generator | None = N
 def per_robot_argmax(logits: torch.Tensor) -> torch.Tensor:
     """``(m,) int64`` each robot's most likely node (the deterministic variant)."""
     return logits.argmax(dim=1)
+
+
+def matched_targets(logits: torch.Tensor) -> torch.Tensor:
+    """``(m,) int64`` the joint choice of largest summed logit with every node used once before any is
+    shared (Hungarian, as ``hier`` decodes its affinities); a robot with no allowed node gets -1.
+
+    Per-robot argmax sends robots that stand together to the same node for ever, since their rows are
+    equal; this decoding of the same plan spreads them.
+
+    Examples
+    --------
+    >>> same = torch.tensor([[2.0, 1.0], [2.0, 1.0]])
+    >>> per_robot_argmax(same).tolist(), matched_targets(same).tolist()
+    ([0, 0], [0, 1])
+    """
+    cost = -logits.detach().double().numpy()
+    return torch.from_numpy(match_min_cost(np.where(np.isfinite(cost), cost, np.inf)))
