@@ -1,6 +1,7 @@
 """Median milliseconds per simulation step and per planning decision on the largest HouseExpo map.
 
-Run: python perf/bench_step_and_decision.py [--steps 400] [--robots 3 8]
+Run: python perf/bench_step_and_decision.py [--steps 400] [--robots 3 8] [--map PATH --resolution M]
+(--map: any map instead of the largest HouseExpo one, e.g. a KTH floor at the paper's 0.05 m.)
 Targets on the 2-core dev machine: sim <= 2 ms per step at 3 robots; a decision <= 50 ms median.
 A decision is the centre's whole work in one round: decode the robots' sparse frontier maps, rebuild and
 merge the team grid, then frontiers, Mean-Shift, one distance field per robot, assignment and paths. The
@@ -18,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mrexplore.config import MissionConfig, SimConfig
+from mrexplore.config import MapConfig, MissionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission
 from mrexplore.sim.world import StepResult
@@ -34,8 +35,8 @@ def largest_houseexpo() -> Path:
     return HOUSEEXPO / best["file"]
 
 
-def bench(map_path: Path, robots: int, steps: int, strategy: str) -> dict[str, float]:
-    truth = load_map(map_path)
+def bench(map_path: Path, robots: int, steps: int, strategy: str, resolution_m: float = 0.05) -> dict[str, float]:
+    truth = load_map(map_path, MapConfig(resolution_m=resolution_m))
     # The package's one replanning loop, with a decision at least every 10 steps (close to missions' rate).
     m = Mission(truth, make_strategy(strategy), SimConfig(robots=robots), MissionConfig(steps, 10), 0, progress=False)
     step_ms: list[float] = []
@@ -68,16 +69,18 @@ def main() -> int:
     ap.add_argument("--steps", type=int, default=400)
     ap.add_argument("--robots", type=int, nargs="+", default=[3, 8])
     ap.add_argument("--strategy", default="utility")
+    ap.add_argument("--map", type=Path, default=None, help="default: the largest HouseExpo map")
+    ap.add_argument("--resolution", type=float, default=0.05, help="cell size, metres (default 0.05)")
     args = ap.parse_args()
-    if not HOUSEEXPO.is_dir():
+    if args.map is None and not HOUSEEXPO.is_dir():
         print(f"skipped: HouseExpo maps not found at {HOUSEEXPO}", file=sys.stderr)
         return 0
-    path = largest_houseexpo()
-    bench(path, 2, 20, args.strategy)  # compile the numba kernels outside the timings
+    path = args.map or largest_houseexpo()
+    bench(path, 2, 20, args.strategy, args.resolution)  # compile the numba kernels outside the timings
     print(f"map {path.stem} ({args.strategy}, {args.steps} steps, a decision at least every 10 steps)")
     print("robots  cells    coverage  step ms (median / p95)  decision ms (median / p95)  robot ms (median)")
     for n in args.robots:
-        r = bench(path, n, args.steps, args.strategy)
+        r = bench(path, n, args.steps, args.strategy, args.resolution)
         print(
             f"{n:6d}  {r['cells']:7d}  {r['coverage']:8.3f}  {r['step_ms_median']:8.2f} / {r['step_ms_p95']:6.2f}"
             f"       {r['decision_ms_median']:8.2f} / {r['decision_ms_p95']:6.2f}"

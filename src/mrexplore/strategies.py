@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
+from mrexplore.boxes import cells_of
 from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig, SimConfig
 from mrexplore.global_planning.classical import GeodesicPlanner, NearestPlanner, UtilityPlanner
 from mrexplore.global_planning.coscan import cap_tasks, lloyd_clusters, sample_tasks, two_opt_tour
@@ -388,7 +389,7 @@ class CoScanPipeline(ExplorationPipeline):
         iterations; each cluster's centre is its centroid task."""
         un = _denoised_un(q.frontiers, q.blacklist, self.preprocess.min_cluster_size)
         n = len(q.robots_rc)
-        tasks = sample_tasks(np.argwhere(un), self.coscan.task_spacing_m / q.resolution_m)
+        tasks = sample_tasks(cells_of(un), self.coscan.task_spacing_m / q.resolution_m)
         if len(tasks) == 0:
             return CandidateSet(Clusters.empty(), "no_frontiers")
         passable = q.state == CellState.FREE

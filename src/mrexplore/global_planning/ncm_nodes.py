@@ -14,6 +14,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from mrexplore.boxes import cells_of
 from mrexplore.preprocessing.frontiers import Frontiers
 from mrexplore.types import BoolGrid, CellState, StateGrid
 
@@ -41,7 +42,7 @@ def ncm_frontier(
     out = frontiers.un_mask.copy()
     reach = clearance_m / resolution_m + 1e-9
     r = math.floor(reach)
-    rc = np.argwhere(out)
+    rc = cells_of(out)
     if r < 1 or len(rc) == 0:
         return out
     # Only the frontier cells are tested: for each offset within the clearance disk, is the cell there an
@@ -73,7 +74,7 @@ def pool_nodes(frontier: BoolGrid, resolution_m: float, pool_m: float = POOL_M) 
     [[2, 2], [1, 5]]
     """
     k = max(1, round(pool_m / resolution_m))
-    rc = np.argwhere(frontier)
+    rc = cells_of(frontier)
     if len(rc) == 0:
         return np.zeros((0, 2), dtype=np.int32)
     block = rc // k

@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
+from mrexplore.boxes import cells_of
 from mrexplore.global_planning.tours import open_tour, split_tour
 from mrexplore.paths.distance_field import distance_fields, distance_matrix, distances_at
 from mrexplore.sim.lidar import ray_count, ray_directions, scan_mark
@@ -101,7 +102,7 @@ def plan_oracle_routes(
     reach = np.isfinite(np.minimum.reduce(start_fields))
     lattice = np.zeros_like(free)
     lattice[:: max(1, spacing_cells), :: max(1, spacing_cells)] = True
-    candidates = np.argwhere(lattice & reach & explorable)
+    candidates = cells_of(lattice & reach & explorable)
     candidates = np.vstack([starts, candidates])  # the starts themselves see something too
     footprints, n_targets = viewpoint_footprints(occupied, explorable, candidates, range_cells, ray_oversampling)
     chosen = candidates[greedy_cover(footprints, n_targets)].astype(np.int32)

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import grown_slices, mask_box
+from mrexplore.boxes import cells_of, grown_slices, mask_box
 from mrexplore.types import BoolGrid, CellState, StateGrid
 
 __all__ = ["Frontiers", "close_unknown_holes", "closing_reach", "detect_frontiers", "FOUR_NEIGHBOUR_KERNEL"]
@@ -33,12 +33,12 @@ class Frontiers:
     @property
     def un_rc(self) -> NDArray[np.int32]:
         """``(n_un, 2) int32`` F_un cells in row-major order."""
-        return np.argwhere(self.un_mask).astype(np.int32)
+        return cells_of(self.un_mask).astype(np.int32)
 
     @property
     def occ_rc(self) -> NDArray[np.int32]:
         """``(n_occ, 2) int32`` F_occ cells in row-major order."""
-        return np.argwhere(self.occ_mask).astype(np.int32)
+        return cells_of(self.occ_mask).astype(np.int32)
 
 
 def close_unknown_holes(state: StateGrid, size_cells: int) -> StateGrid:
