@@ -187,7 +187,7 @@ def test_train_and_policy_errors_are_one_line(tmp_path, capsys) -> None:
 
 
 def test_ncm_explores_and_benches_with_a_given_policy(tmp_path, capsys) -> None:
-    """Both NCM variants run from the CLI with a policy file (here an untrained network); a run with both
+    """All three NCM decodings run from the CLI with a policy file (here an untrained network); a run with both
     learned kinds names each file; a file of the other kind is refused in one line."""
     import hashlib
 

@@ -6,9 +6,10 @@ import dataclasses
 import hashlib
 import math
 import subprocess
+from collections.abc import Callable
 from importlib import metadata, resources
 from pathlib import Path
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 import torch
 
@@ -74,18 +75,18 @@ def code_version() -> str:
     return f"{version}+{sha}" if sha else version
 
 
-class LoadedPolicy:
-    """A network with where it came from (path, sha256, what the file records)."""
-
-    def __init__(self, net: MultiGraphNet, path: Path, sha256: str, meta: dict[str, Any]) -> None:
-        self.net, self.path, self.sha256, self.meta = net, path, sha256, meta
+_Net = TypeVar("_Net", MultiGraphNet, NcmNet)
 
 
-class LoadedNcmPolicy:
-    """NCM's actor with where it came from (path, sha256, what the file records)."""
+class LoadedPolicy(Generic[_Net]):
+    """A network (the mGNN, or NCM's actor) with where it came from (path, sha256, what the file records)."""
 
-    def __init__(self, net: NcmNet, path: Path, sha256: str, meta: dict[str, Any]) -> None:
-        self.net, self.path, self.sha256, self.meta = net, path, sha256, meta
+    def __init__(self, net: _Net, path: Path, sha256: str, meta: dict[str, Any]) -> None:
+        self.net: _Net = net
+        self.path, self.sha256, self.meta = path, sha256, meta
+
+
+LoadedNcmPolicy = LoadedPolicy[NcmNet]
 
 
 def save_policy(path: Path, net: MultiGraphNet | NcmNet, meta: dict[str, Any] | None = None) -> None:
@@ -166,27 +167,38 @@ def _misfit(path: Path, exc: BaseException) -> MrExploreError:
     return MrExploreError(f"policy file {path} does not fit this network ({first}); retrain it")
 
 
-def load_policy(path: Path | None = None) -> LoadedPolicy:
-    """Load a ``hier`` policy written by :func:`save_policy` (default: the shipped one); one-line errors."""
-    path, blob = _read_policy(path, default_policy_path(), HIER_FORMAT)
+def _loaded(path: Path, blob: dict[str, Any], build: Callable[[], _Net], config_key: str) -> LoadedPolicy[_Net]:
+    """The network ``build`` makes from ``blob``'s config, with the file's checked weights, in eval mode;
+    any misfit is one line naming the file."""
     try:
-        cfg = config_from_dict(LearnedConfig, blob["learned_config"])
-        value_inputs = int(blob["value_inputs"])
-        if value_inputs != VALUE_INPUTS:
-            raise MrExploreError(f"the critic reads {value_inputs} scalars, this version {VALUE_INPUTS}")
-        net = MultiGraphNet(cfg, value_inputs)
+        net = build()
         net.load_state_dict(_checked_state(blob))
     except _LOAD_ERRORS as exc:
         raise _misfit(path, exc) from None
     net.eval()
-    meta = {k: blob[k] for k in ("code_version", "meta", "learned_config")}
+    meta = {k: blob[k] for k in ("code_version", "meta", config_key)}
     return LoadedPolicy(net, path, file_sha256(path), meta)
+
+
+def load_policy(path: Path | None = None) -> LoadedPolicy[MultiGraphNet]:
+    """Load a ``hier`` policy written by :func:`save_policy` (default: the shipped one); one-line errors."""
+    path, blob = _read_policy(path, default_policy_path(), HIER_FORMAT)
+
+    def build() -> MultiGraphNet:
+        cfg = config_from_dict(LearnedConfig, blob["learned_config"])
+        value_inputs = int(blob["value_inputs"])
+        if value_inputs != VALUE_INPUTS:
+            raise MrExploreError(f"the critic reads {value_inputs} scalars, this version {VALUE_INPUTS}")
+        return MultiGraphNet(cfg, value_inputs)
+
+    return _loaded(path, blob, build, "learned_config")
 
 
 def load_ncm_policy(path: Path | None = None) -> LoadedNcmPolicy:
     """Load an ``ncm`` policy written by :func:`save_policy` (default: the shipped one); one-line errors."""
     path, blob = _read_policy(path, default_ncm_policy_path(), NCM_FORMAT)
-    try:
+
+    def build() -> NcmNet:
         raw = blob["ncm_config"]
         if not isinstance(raw, dict) or set(raw) != {f.name for f in dataclasses.fields(NcmConfig)}:
             raise ValueError("its network config has other fields")
@@ -195,10 +207,6 @@ def load_ncm_policy(path: Path | None = None) -> LoadedNcmPolicy:
             raise ValueError(f"network sizes out of range: {cfg}")
         if not (0 < cfg.sinkhorn_iters <= 100 and math.isfinite(cfg.sharpen) and cfg.sharpen > 0):
             raise ValueError(f"Sinkhorn settings out of range: {cfg}")
-        net = NcmNet(cfg)
-        net.load_state_dict(_checked_state(blob))
-    except _LOAD_ERRORS as exc:
-        raise _misfit(path, exc) from None
-    net.eval()
-    meta = {k: blob[k] for k in ("code_version", "meta", "ncm_config")}
-    return LoadedNcmPolicy(net, path, file_sha256(path), meta)
+        return NcmNet(cfg)
+
+    return _loaded(path, blob, build, "ncm_config")
