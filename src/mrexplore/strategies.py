@@ -19,7 +19,7 @@ from mrexplore.global_planning.oracle import plan_oracle_routes
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem, GlobalPlanner
 from mrexplore.local_planning.router import LocalRouter
 from mrexplore.maps.ground_truth import GroundTruthMap, explorable_region
-from mrexplore.paths.distance_field import descend_path, distance_fields, distance_matrix, distances_at
+from mrexplore.paths.distance_field import Field, descend_path, distance_fields, distance_matrix, distances_at
 from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers
 from mrexplore.preprocessing.frontiers import Frontiers, detect_frontiers
 from mrexplore.types import BoolGrid, CellState, MrExploreError, StateGrid
@@ -93,7 +93,7 @@ def _decision(
     clusters: Clusters,
     assignment: Assignment,
     routes: list[NDArray[np.int32]],
-    fields: list[NDArray[np.float32]],
+    fields: list[Field],
     passable: BoolGrid,
 ) -> Decision:
     """Each robot's goal is the first target of its route (empty: none); its path is read off its own
@@ -120,7 +120,7 @@ class CandidateQuery:
     """Frontier cells that stopped being candidates (stood on without resolving them; stalled goals)."""
     robots_rc: NDArray[np.int32]
     """``(n_robots, 2) int32`` the cells of the robots assigned to."""
-    fields: Callable[[], list[NDArray[np.float32]]]
+    fields: Callable[[], list[Field]]
     """Each robot's distance field on the planning grid, computed once, on the first call."""
     current: Sequence[NDArray[np.int32]] | None
     """Each robot's current route (its goal first; empty for none)."""
@@ -149,7 +149,7 @@ class _Posed:
     """What layer 3 reuses from layer 1 and the distances of the same decision."""
 
     frontiers: Frontiers
-    fields: list[NDArray[np.float32]]
+    fields: list[Field]
     passable: BoolGrid
     kept: dict[int, tuple[int, NDArray[np.int32]]]
     candidates: CandidateSet | None = None
@@ -209,7 +209,7 @@ class ExplorationPipeline:
     def _committed(
         self,
         clusters: Clusters,
-        fields: list[NDArray[np.float32]],
+        fields: list[Field],
         current: Sequence[NDArray[np.int32]],
         dist: NDArray[np.float64],
     ) -> dict[int, tuple[int, NDArray[np.int32]]]:
@@ -223,7 +223,7 @@ class ExplorationPipeline:
             k = where.get((int(route[0, 0]), int(route[0, 1])))
             if k is None:
                 continue
-            d_goal = float(fields[i][route[0, 0], route[0, 1]])
+            d_goal = fields[i].value(route[0, 0], route[0, 1])
             if np.isfinite(d_goal):
                 dist[i, k] = min(dist[i, k], self.commitment * d_goal)
                 kept[i] = (k, route)
@@ -276,9 +276,9 @@ class ExplorationPipeline:
         frontiers = detect_frontiers(state)
         planning = self.planning_state(state)
         passable = planning == CellState.FREE
-        computed: list[list[NDArray[np.float32]]] = []
+        computed: list[list[Field]] = []
 
-        def fields_now() -> list[NDArray[np.float32]]:
+        def fields_now() -> list[Field]:
             if not computed:
                 computed.append(distance_fields(passable, robots_rc))
             return computed[0]

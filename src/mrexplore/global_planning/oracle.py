@@ -99,7 +99,7 @@ def plan_oracle_routes(
     free = ~occupied
     starts = np.asarray(starts_rc, dtype=np.int64)
     start_fields = distance_fields(free, starts)
-    reach = np.isfinite(np.minimum.reduce(start_fields))
+    reach = np.isfinite(np.minimum.reduce([f.full() for f in start_fields]))
     lattice = np.zeros_like(free)
     lattice[:: max(1, spacing_cells), :: max(1, spacing_cells)] = True
     candidates = cells_of(lattice & reach & explorable)

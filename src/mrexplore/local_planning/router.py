@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 from mrexplore.config import LocalPlanningConfig, PreprocessConfig
 from mrexplore.local_planning.routing import RouteProblem, reversal_search
-from mrexplore.paths.distance_field import distance_fields
+from mrexplore.paths.distance_field import FieldLike, distance_fields, distances_at
 from mrexplore.preprocessing.clustering import cluster_frontiers
 from mrexplore.types import BoolGrid, GridRC
 
@@ -50,7 +50,7 @@ class LocalRouter:
         self,
         passable: BoolGrid,
         robot_rc: GridRC,
-        robot_field: NDArray[np.float32],
+        robot_field: FieldLike,
         members_rc: NDArray[np.int32],
         resolution_m: float,
     ) -> Route | None:
@@ -61,7 +61,8 @@ class LocalRouter:
         passable:
             ``(H, W) bool`` cells a robot may drive on.
         robot_field:
-            ``(H, W) float32`` the robot's distance field on ``passable`` (cells).
+            the robot's distance field on ``passable`` (cells): a :class:`~mrexplore.paths.distance_field.Field`
+            or a whole-grid ``(H, W) float32`` array.
         members_rc:
             ``(n, 2) int32`` members of the assigned cluster.
         """
@@ -78,7 +79,7 @@ class LocalRouter:
         )
         cand = sub.centers_rc
         gains = sub.sizes
-        from_robot = robot_field[cand[:, 0], cand[:, 1]].astype(np.float64)
+        from_robot = distances_at(robot_field, cand)
         keep = np.flatnonzero(np.isfinite(from_robot))
         if len(keep) == 0:
             return None
@@ -107,7 +108,7 @@ class LocalRouter:
         r1, c1 = np.minimum(pts.max(axis=0) + margin + 1, passable.shape)
         fields = distance_fields(passable[r0:r1, c0:c1], cand - np.array([r0, c0], dtype=np.int32))
         local = cand - np.array([r0, c0])
-        between = np.array([f[local[:, 0], local[:, 1]] for f in fields], dtype=np.float64)
+        between = np.array([f.at(local) for f in fields], dtype=np.float64)
         via_robot = from_robot[:, None] + from_robot[None, :]
         between = np.where(np.isfinite(between), between, via_robot)
         return np.minimum(between, between.T)

@@ -37,7 +37,7 @@ def lower_bound_steps(
     35
     """
     fields = distance_fields(passable, np.asarray(starts_rc))
-    nearest = np.minimum.reduce(fields)
+    nearest = np.minimum.reduce([f.full() for f in fields])
     cells = nearest[explorable & passable]
     cells = cells[np.isfinite(cells)]
     if len(cells) == 0:
