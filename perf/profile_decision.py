@@ -2,7 +2,8 @@
 
     python perf/profile_decision.py --map ../shared/maps/kth_floorplans/50010536_PLAN3.yaml --robots 8
 
-Prints the map size, the mean decision time at the centre, and the profile's top functions by cumulative time.
+Prints the map size, the mean decision time at the centre, and the profile's top functions by cumulative
+time (``--sort tottime``: by time spent in the function itself).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ def main() -> None:
     ap.add_argument("--resolution", type=float, default=0.05)
     ap.add_argument("--steps", type=int, default=300)
     ap.add_argument("--top", type=int, default=22)
+    ap.add_argument("--sort", default="cumulative", choices=("cumulative", "tottime"), help="order of the lines")
     args = ap.parse_args()
     truth = load_map(args.map, MapConfig(resolution_m=args.resolution))
     print(f"{truth.name}: {truth.shape[0]} x {truth.shape[1]} = {truth.shape[0] * truth.shape[1]} cells")
@@ -48,7 +50,7 @@ def main() -> None:
         f"{mission.steps} steps, {len(ms)} decisions in {time.perf_counter() - t0:.1f} s; "
         f"centre decision {sum(ms) / len(ms):.1f} ms mean"
     )
-    pstats.Stats(profile).sort_stats("cumulative").print_stats(args.top)
+    pstats.Stats(profile).sort_stats(args.sort).print_stats(args.top)
 
 
 if __name__ == "__main__":

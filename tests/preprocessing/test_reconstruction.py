@@ -135,6 +135,22 @@ def test_roundtrip_exact_on_random_maps(case: tuple[np.ndarray, tuple[int, int]]
     assert np.array_equal(rebuilt[near], state[near])
 
 
+def test_fill_beyond_the_box_of_the_message_is_rebuilt() -> None:
+    # Known free space up to the map's edges and one unknown cell: the message's coded cells and seed
+    # span rows and columns 2..5 only, but the free space it stands for is the whole map but one cell.
+    state = state_grid("""
+        .......
+        .......
+        .......
+        .......
+        ....?..
+        .......
+    """)
+    message = sparse_frontier_map(state, 0, 0, (2, 2))
+    assert sorted(divmod(int(c), 7) for c in message.cells) == [(3, 4), (4, 3), (4, 5), (5, 4)]
+    assert np.array_equal(roundtrip(state, (2, 2)), state)
+
+
 def two_robots() -> tuple[np.ndarray, np.ndarray]:
     a = state_grid("""
         ##########

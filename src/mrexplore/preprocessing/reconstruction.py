@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from mrexplore.boxes import Box, grown_slices
 from mrexplore.preprocessing.frontiers import close_unknown_holes
 from mrexplore.preprocessing.scanline_fill import mark_coded_cells, scanline_fill
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap, apply_delta
@@ -65,11 +66,47 @@ def fill_paper(boundary: BoolGrid, seed_rc: GridRC) -> BoolGrid:
     return filled | boundary
 
 
+def _fill_box(codes: NDArray[np.uint8], cells: NDArray[np.int64], seeds: NDArray[np.int64]) -> Box | None:
+    """Where one robot's fill can go: the box of its coded cells and seeds grown by one cell (free space
+    is fenced by coded cells, except along the map's edges); None when the message is empty."""
+    flat = np.concatenate([cells, seeds])
+    if len(flat) == 0:
+        return None
+    W = codes.shape[1]
+    rows, cols = np.divmod(flat, W)
+    rs, cs = grown_slices((int(rows.min()), int(rows.max()) + 1, int(cols.min()), int(cols.max()) + 1), 1, codes.shape)
+    return rs.start, rs.stop, cs.start, cs.stop
+
+
+def _escaped(filled: BoolGrid, box: Box, shape: tuple[int, int]) -> bool:
+    """Whether a fill in ``box`` reached a side of it inside the grid: free space may go on beyond."""
+    r0, r1, c0, c1 = box
+    return bool(
+        (r0 > 0 and filled[0].any())
+        or (r1 < shape[0] and filled[-1].any())
+        or (c0 > 0 and filled[:, 0].any())
+        or (c1 < shape[1] and filled[:, -1].any())
+    )
+
+
 def _rebuild_into(
     codes: NDArray[np.uint8], cells: NDArray[np.int64], seeds: NDArray[np.int64], free: BoolGrid, occupied: BoolGrid
 ) -> None:
+    seeds = np.asarray(seeds, dtype=np.int64)
+    box = _fill_box(codes, cells, seeds)
+    if box is not None:
+        # On a large map a robot's free space is a small part of it: fill that box only.
+        r0, r1, c0, c1 = box
+        sub = np.ascontiguousarray(codes[r0:r1, c0:c1])
+        rows, cols = np.divmod(seeds, codes.shape[1])
+        filled = np.zeros(sub.shape, dtype=bool)
+        scanline_fill(sub, (rows - r0) * sub.shape[1] + (cols - c0), _NO_FENCE, filled)
+        if not _escaped(filled, box, codes.shape):
+            free[r0:r1, c0:c1] |= filled
+            mark_coded_cells(codes, cells, free, occupied)
+            return
     filled = np.zeros(codes.shape, dtype=bool)
-    scanline_fill(codes, np.asarray(seeds, dtype=np.int64), _NO_FENCE, filled)
+    scanline_fill(codes, seeds, _NO_FENCE, filled)
     free |= filled
     mark_coded_cells(codes, cells, free, occupied)
 
