@@ -33,6 +33,7 @@ def test_json_run_prints_exactly_one_object(capsys) -> None:
         "plan_ms_mean",
         "plan_ms_p95",
         "wall_s",
+        "peak_mb",
         "done_reason",
         "rounds",
         "bytes_grid",

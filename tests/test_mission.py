@@ -12,7 +12,7 @@ from mrexplore.mission import run_mission
 from mrexplore.strategies import make_strategy
 from mrexplore.types import MrExploreError
 
-TIMING_KEYS = {"wall_s", "plan_ms_mean", "plan_ms_p95"}
+TIMING_KEYS = {"wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb"}
 
 
 @pytest.fixture(scope="module")

@@ -496,7 +496,7 @@ def _summary(rec: dict[str, Any]) -> str:
             f"  driven: longest {rec['path_len_max_m']:.1f} m, team {rec['path_len_sum_m']:.1f} m; "
             f"overlap {rec['overlap']:.2f}",
             f"  {rec['decisions']} decisions, {rec['plan_ms_mean']:.1f} ms mean, {rec['plan_ms_p95']:.1f} ms p95; "
-            f"wall {rec['wall_s']:.1f} s; ended: {rec['done_reason']}",
+            f"wall {rec['wall_s']:.1f} s; peak memory {rec['peak_mb']:.0f} MB; ended: {rec['done_reason']}",
             f"  sent over {rec['rounds']} rounds: sparse {_kb(rec['bytes_sparse'])}, delta "
             f"{_kb(rec['bytes_sparse_delta'])}; grid {_kb(rec['bytes_grid'])}, zlib {_kb(rec['bytes_grid_zlib'])}; "
             f"centre map IoU min {rec['reconstruction_iou_min']:.4f}",

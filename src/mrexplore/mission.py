@@ -34,6 +34,7 @@ from tqdm import tqdm
 from mrexplore.config import MissionConfig, SimConfig
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 from mrexplore.maps.ground_truth import GroundTruthMap
+from mrexplore.memory import peak_mb, reset_peak
 from mrexplore.paths.astar import astar_path
 from mrexplore.paths.distance_field import descend_path, distance_fields, distances_at
 from mrexplore.preprocessing.frontiers import close_unknown_holes, detect_frontiers
@@ -120,6 +121,7 @@ class Mission:
         observer: Observer | None = None,
         progress: bool | None = None,
     ) -> None:
+        reset_peak()  # the episode's peak memory, from here (the map is already loaded)
         self.sim_cfg = sim_cfg = sim_cfg or SimConfig()
         self.mission_cfg = mission_cfg = mission_cfg or MissionConfig()
         self.truth = truth
@@ -548,6 +550,7 @@ class Mission:
             self.link.totals.as_measures(),
             lower_bound_steps(~truth.occupied, sim.explorable, self.starts_rc, truth.resolution_m, self.sim_cfg),
             int((~sim.alive).sum()),
+            peak_mb(),
         )
         return MissionResult(measures, np.asarray(self.curve), self.starts_rc.copy(), self.state, sim)
 

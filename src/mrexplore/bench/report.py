@@ -195,16 +195,21 @@ def bound_table(rows: list[Row], strategies: Sequence[str]) -> str:
 
 
 def collaboration_table(rows: list[Row], strategies: Sequence[str]) -> str:
-    """Per strategy: overlap (sum of robot coverages less team coverage), longest and total driven path."""
-    lines = ["| strategy | overlap | longest path m | team path m | decisions | plan ms mean |", "|" + " --- |" * 6]
+    """Per strategy: overlap (sum of robot coverages less team coverage), longest and total driven path,
+    decisions, their mean time and the largest peak memory of an episode (– in results from before it)."""
+    lines = [
+        "| strategy | overlap | longest path m | team path m | decisions | plan ms mean | peak MB (max) |",
+        "|" + " --- |" * 7,
+    ]
     for s in strategies:
         sel = [r for r in rows if r["strategy"] == s]
         if not sel:
             continue
         mean = {k: np.mean([float(r[k]) for r in sel]) for k in _COLLAB}
+        peaks = [float(r["peak_mb"]) for r in sel if r.get("peak_mb") not in (None, "")]
         lines.append(
             f"| {s} | {mean['overlap']:.2f} | {mean['path_len_max_m']:.1f} | {mean['path_len_sum_m']:.1f} | "
-            f"{mean['decisions']:.0f} | {mean['plan_ms_mean']:.1f} |"
+            f"{mean['decisions']:.0f} | {mean['plan_ms_mean']:.1f} | {f'{max(peaks):.0f}' if peaks else '–'} |"
         )
     return "\n".join(lines)
 

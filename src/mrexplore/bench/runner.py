@@ -64,7 +64,7 @@ COLUMNS = [
     "size_class", "free_area_m2",
     "steps", "coverage", "steps_to_90", "steps_to_95", "steps_to_99", "lower_bound_steps",
     "path_len_max_m", "path_len_sum_m", "overlap", "decisions", "plan_ms_mean", "plan_ms_p95", "wall_s",
-    "done_reason", "rounds", "bytes_grid", "bytes_grid_zlib", "bytes_grid_delta_zlib", "bytes_sparse",
+    "peak_mb", "done_reason", "rounds", "bytes_grid", "bytes_grid_zlib", "bytes_grid_delta_zlib", "bytes_sparse",
     "bytes_sparse_delta", "reconstruction_iou_min", "reconstruction_iou_mean", "messages_sent", "messages_lost",
     "messages_resent", "acks_lost", "bytes_lost", "bytes_resent", "centre_restarts", "robots_failed",
     "coverage_curve",

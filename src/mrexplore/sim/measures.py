@@ -115,6 +115,8 @@ class EpisodeMeasures:
     reconstruction_iou_mean: float = 1.0
     lower_bound_steps: int = 0
     """Steps no planner could beat from these starts (see :func:`lower_bound_steps`)."""
+    peak_mb: float = 0.0
+    """Peak resident memory of the process during the mission, MB (see :mod:`mrexplore.memory`)."""
 
     @classmethod
     def from_run(
@@ -128,6 +130,7 @@ class EpisodeMeasures:
         transmission: dict[str, Any] | None = None,
         lower_bound: int = 0,
         robots_failed: int = 0,
+        peak_mb: float = 0.0,
     ) -> EpisodeMeasures:
         """Measures of a finished run; ``transmission`` holds the byte and IoU fields (see
         :meth:`~mrexplore.preprocessing.transmission.TransmissionTotals.as_measures`)."""
@@ -151,6 +154,7 @@ class EpisodeMeasures:
             **(transmission or {}),
             lower_bound_steps=lower_bound,
             robots_failed=robots_failed,
+            peak_mb=round(peak_mb, 1),
         )
 
     def to_dict(self) -> dict[str, Any]:
