@@ -337,10 +337,10 @@ class Mission:
         own = close_unknown_holes(own, self.strategy.preprocess.closing_size_cells)
         passable = own == CellState.FREE
         passable[here[0] - origin[0], here[1] - origin[1]] = True
-        field = distance_fields(passable, (here - origin)[None])[0]
         targets = detect_frontiers(own).un_rc
         if len(targets):
             targets = targets[~self.blacklist[targets[:, 0] + origin[0], targets[:, 1] + origin[1]]]
+        field = distance_fields(passable, (here - origin)[None], targets)[0]
         d = distances_at(field, targets) if len(targets) else np.zeros(0)
         if len(d) and np.isfinite(d.min()):
             goal = targets[int(np.argmin(d))]

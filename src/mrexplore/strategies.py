@@ -278,9 +278,9 @@ class ExplorationPipeline:
         passable = planning == CellState.FREE
         computed: list[list[Field]] = []
 
-        def fields_now() -> list[Field]:
+        def fields_now(targets_rc: NDArray[np.integer] | None = None) -> list[Field]:
             if not computed:
-                computed.append(distance_fields(passable, robots_rc))
+                computed.append(distance_fields(passable, robots_rc, targets_rc))
             return computed[0]
 
         cand = self.candidates(
@@ -292,7 +292,10 @@ class ExplorationPipeline:
             return PosedDecision(None, _ended(planning, frontiers, clusters, n, cand.ended))
         if len(clusters) == 0:
             return PosedDecision(None, _ended(planning, frontiers, clusters, n, "no_frontiers"))
-        fields = fields_now()
+        # Every cell a field is read at from here on: centres, members (routes and goals), robots, current
+        # goals. Each search stops once it has them all (a strategy that asked for whole fields has them).
+        goals = [r[:1] for r in current] if current is not None else []
+        fields = fields_now(np.vstack([clusters.centers_rc, clusters.members_rc, robots_rc, *goals]))
         dist = np.stack([distances_at(f, clusters.centers_rc) for f in fields])
         kept = self._committed(clusters, fields, current, dist) if current is not None and self.commitment < 1 else {}
         if not np.isfinite(dist).any():

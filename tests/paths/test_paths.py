@@ -13,7 +13,13 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from mrexplore.paths.astar import astar_path, path_length_cells
-from mrexplore.paths.distance_field import distance_field, distance_fields, distance_matrix, distances_at
+from mrexplore.paths.distance_field import (
+    descend_path,
+    distance_field,
+    distance_fields,
+    distance_matrix,
+    distances_at,
+)
 
 
 def reference_dijkstra(passable: np.ndarray, src: tuple[int, int]) -> np.ndarray:
@@ -108,3 +114,35 @@ def test_distance_matrix_equals_fields_read_at_targets(seed: int) -> None:
     targets = cells[rng.integers(0, len(cells), 6)]
     expected = np.stack([distances_at(f, targets) for f in distance_fields(passable, sources)])
     np.testing.assert_array_equal(distance_matrix(passable, sources, targets), expected)
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.integers(0, 10**6))
+def test_fields_stopped_at_their_targets_are_exact_up_to_them(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    passable = rng.random((int(rng.integers(2, 25)), int(rng.integers(2, 25)))) < 0.7
+    cells = np.argwhere(np.ones_like(passable))
+    sources = cells[rng.integers(0, len(cells), 3)]
+    targets = cells[rng.integers(0, len(cells), int(rng.integers(0, 5)))]
+    for whole, stopped in zip(
+        distance_fields(passable, sources), distance_fields(passable, sources, targets), strict=True
+    ):
+        full, part = whole.full(), stopped.full()
+        np.testing.assert_array_equal(stopped.at(targets), whole.at(targets))
+        finite = np.isfinite(part)
+        np.testing.assert_array_equal(part[finite], full[finite])  # what it holds is exact
+        # and it holds every cell no farther than the farthest reachable target
+        reach = whole.at(targets)
+        reach = reach[np.isfinite(reach)]
+        if len(reach):
+            assert finite[full <= reach.max()].all()
+        for t in targets:
+            assert (
+                descend_path(stopped, passable, tuple(t)).tolist() == descend_path(whole, passable, tuple(t)).tolist()
+            )
+
+
+def test_a_field_stops_at_its_farthest_target() -> None:
+    corridor = np.ones((1, 8), bool)
+    f = distance_fields(corridor, np.array([[0, 0]]), np.array([[0, 3], [0, 2]]))[0]
+    assert f.full()[0].tolist() == [0, 1, 2, 3, *[math.inf] * 4]

@@ -106,8 +106,8 @@ class LocalRouter:
         pts = np.vstack([members_rc, np.asarray(robot_rc, dtype=np.int32)[None]])
         r0, c0 = np.maximum(pts.min(axis=0) - margin, 0)
         r1, c1 = np.minimum(pts.max(axis=0) + margin + 1, passable.shape)
-        fields = distance_fields(passable[r0:r1, c0:c1], cand - np.array([r0, c0], dtype=np.int32))
         local = cand - np.array([r0, c0])
+        fields = distance_fields(passable[r0:r1, c0:c1], local, local)
         between = np.array([f.at(local) for f in fields], dtype=np.float64)
         via_robot = from_robot[:, None] + from_robot[None, :]
         between = np.where(np.isfinite(between), between, via_robot)

@@ -87,7 +87,9 @@ def _as_field(field: FieldLike) -> Field:
 
 
 @nb.njit(cache=True, nogil=True)
-def _two_queue_dijkstra(passable: np.ndarray, sr: int, sc: int) -> np.ndarray:  # pragma: no cover - numba
+def _two_queue_dijkstra(
+    passable: np.ndarray, sr: int, sc: int, targets: np.ndarray, stop_early: bool
+) -> np.ndarray:  # pragma: no cover - numba
     H, W = passable.shape
     # Work on a copy padded by one blocked cell: neighbours never leave the array, no bounds checks.
     Wp = W + 2
@@ -105,12 +107,23 @@ def _two_queue_dijkstra(passable: np.ndarray, sr: int, sc: int) -> np.ndarray:  
     # The two orthogonal cells a diagonal move passes between (no corner cutting).
     side_a = np.array([-1, 1, -1, 1], dtype=np.int64)
     side_b = np.array([-Wp, -Wp, Wp, Wp], dtype=np.int64)
+    # Targets: with stop_early, the search ends once every passable target is settled.
+    is_target = np.zeros(n if stop_early else 0, dtype=np.bool_)
+    remaining = 0
+    if stop_early:
+        for t in targets:
+            v = (t // W + 1) * Wp + t % W + 1
+            if free[v] and not is_target[v]:
+                is_target[v] = True
+                remaining += 1
     q_node = np.empty((2, H * W + 1), dtype=np.int64)
     q_key = np.empty((2, H * W + 1), dtype=np.float32)
     h0 = t0 = h1 = t1 = 0
     sqrt2 = np.float32(math.sqrt(2.0))
     one = np.float32(1.0)
     best[s] = 0.0
+    if stop_early and remaining == 0:
+        return best.reshape((H + 2, Wp))  # nothing to reach
     q_node[0, 0] = s
     q_key[0, 0] = 0.0
     t0 = 1
@@ -125,6 +138,17 @@ def _two_queue_dijkstra(passable: np.ndarray, sr: int, sc: int) -> np.ndarray:  
             h1 += 1
         if du > best[u]:
             continue  # stale: u was settled with a smaller key
+        if stop_early and is_target[u]:
+            is_target[u] = False
+            remaining -= 1
+            if remaining == 0:
+                # Keys pop in order: cells at du or less are final; the rest of the queues is not.
+                for qi in range(2):
+                    for j in range(h0 if qi == 0 else h1, t0 if qi == 0 else t1):
+                        v = q_node[qi, j]
+                        if best[v] > du:
+                            best[v] = np.inf
+                break
         nd = du + one
         for k in range(4):
             v = u + straight[k]
@@ -144,9 +168,23 @@ def _two_queue_dijkstra(passable: np.ndarray, sr: int, sc: int) -> np.ndarray:  
     return best.reshape((H + 2, Wp))
 
 
-def _search(passable: np.ndarray, sr: int, sc: int) -> NDArray[np.float32]:
-    """:func:`_two_queue_dijkstra` without its padding (a view)."""
-    return _two_queue_dijkstra(passable, sr, sc)[1:-1, 1:-1]
+_NO_TARGETS = np.zeros(0, dtype=np.int64)
+
+
+def _search(passable: np.ndarray, sr: int, sc: int, targets: NDArray[np.int64] | None = None) -> NDArray[np.float32]:
+    """:func:`_two_queue_dijkstra` without its padding (a view); ``targets``: flat indices into
+    ``passable`` to stop at once all are reached (None: search everything)."""
+    if targets is None:
+        return _two_queue_dijkstra(passable, sr, sc, _NO_TARGETS, False)[1:-1, 1:-1]
+    return _two_queue_dijkstra(passable, sr, sc, targets, True)[1:-1, 1:-1]
+
+
+def _flat_inside(targets_rc: NDArray[np.integer], r0: int, c0: int, shape: tuple[int, ...]) -> NDArray[np.int64]:
+    """Flat indices into a crop of ``shape`` at ``(r0, c0)`` of the targets that lie inside it."""
+    t = np.asarray(targets_rc, dtype=np.int64).reshape(-1, 2)
+    r, c = t[:, 0] - r0, t[:, 1] - c0
+    inside = (r >= 0) & (r < shape[0]) & (c >= 0) & (c < shape[1])
+    return r[inside] * shape[1] + c[inside]
 
 
 def distance_field(passable: BoolGrid, source_rc: GridRC) -> NDArray[np.float32]:
@@ -186,9 +224,18 @@ def _crop(passable: BoolGrid) -> tuple[np.ndarray, int, int] | None:
     return np.ascontiguousarray(passable[r0:r1, c0:c1]), r0, c0
 
 
-def distance_fields(passable: BoolGrid, sources_rc: NDArray[np.integer]) -> list[Field]:
+def distance_fields(
+    passable: BoolGrid, sources_rc: NDArray[np.integer], targets_rc: NDArray[np.integer] | None = None
+) -> list[Field]:
     """One distance field per source (as :func:`distance_field`), computed and kept on the passable
     cells' bounding box, on the shared threads.
+
+    Parameters
+    ----------
+    targets_rc:
+        ``(k, 2) int`` the only cells the caller will read (and paths to them): each search stops once it
+        has reached all of them. Every finite value is then exact; cells farther from the source than
+        every target read ``inf``. None: every cell.
 
     Returns
     -------
@@ -208,11 +255,12 @@ def distance_fields(passable: BoolGrid, sources_rc: NDArray[np.integer]) -> list
     if cropped is None:
         return [Field(np.full((0, 0), np.inf, dtype=np.float32), 0, 0, shape) for _ in range(len(sources_rc))]
     crop, r0, c0 = cropped
+    flat = None if targets_rc is None else _flat_inside(targets_rc, r0, c0, crop.shape)
 
     def one(src: NDArray[np.integer]) -> Field:
         r, c = int(src[0]) - r0, int(src[1]) - c0
         if 0 <= r < crop.shape[0] and 0 <= c < crop.shape[1]:
-            return Field(_search(crop, r, c), r0, c0, shape)
+            return Field(_search(crop, r, c, flat), r0, c0, shape)
         return Field(np.full((0, 0), np.inf, dtype=np.float32), 0, 0, shape)
 
     return map_threads(one, list(sources_rc))  # the kernel releases the GIL
@@ -242,12 +290,13 @@ def distance_matrix(
     crop, r0, c0 = cropped
     tr, tc = targets[:, 0] - r0, targets[:, 1] - c0
     inside = (tr >= 0) & (tr < crop.shape[0]) & (tc >= 0) & (tc < crop.shape[1])
+    flat = tr[inside] * crop.shape[1] + tc[inside]
 
     def row(src: NDArray[np.int64]) -> NDArray[np.float64]:
         d = np.full(len(targets), np.inf)
         r, c = int(src[0]) - r0, int(src[1]) - c0
         if 0 <= r < crop.shape[0] and 0 <= c < crop.shape[1]:
-            d[inside] = _search(crop, r, c)[tr[inside], tc[inside]]
+            d[inside] = _search(crop, r, c, flat)[tr[inside], tc[inside]]
         return d
 
     rows = map_threads(row, list(sources))
