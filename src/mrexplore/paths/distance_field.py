@@ -11,6 +11,7 @@ cell.
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
 import numba as nb
@@ -87,43 +88,51 @@ def _as_field(field: FieldLike) -> Field:
 
 
 @nb.njit(cache=True, nogil=True)
-def _two_queue_dijkstra(
-    passable: np.ndarray, sr: int, sc: int, targets: np.ndarray, stop_early: bool
-) -> np.ndarray:  # pragma: no cover - numba
+def _padded(passable: np.ndarray) -> np.ndarray:  # pragma: no cover - numba
+    """``passable`` flattened with a border of one blocked cell: neighbours never leave the array."""
     H, W = passable.shape
-    # Work on a copy padded by one blocked cell: neighbours never leave the array, no bounds checks.
     Wp = W + 2
-    n = (H + 2) * Wp
-    free = np.zeros(n, dtype=np.bool_)
+    free = np.zeros((H + 2) * Wp, dtype=np.bool_)
     for r in range(H):
         for c in range(W):
             free[(r + 1) * Wp + c + 1] = passable[r, c]
+    return free
+
+
+@nb.njit(cache=True, nogil=True)
+def _two_queue_dijkstra(
+    free: np.ndarray,
+    Wp: int,
+    s: int,
+    targets: np.ndarray,
+    stop_early: bool,
+    q_node: np.ndarray,
+    q_key: np.ndarray,
+    is_target: np.ndarray,
+) -> np.ndarray:  # pragma: no cover - numba
+    """Distances from padded cell ``s`` over the padded flat grid ``free`` (row length ``Wp``).
+
+    ``q_node``, ``q_key`` (``(2, passable cells + 1)``) and ``is_target`` (all False, one per padded cell)
+    are the caller's scratch, reused from search to search: allocating them afresh per search cost more
+    in page faults than the search itself on a large floor. ``is_target`` is left all False again.
+    """
+    n = free.shape[0]
     best = np.full(n, np.inf, dtype=np.float32)
-    s = (sr + 1) * Wp + sc + 1
     if not free[s]:
-        return best.reshape((H + 2, Wp))
-    straight = np.array([-Wp, Wp, -1, 1], dtype=np.int64)
-    diag = np.array([-Wp - 1, -Wp + 1, Wp - 1, Wp + 1], dtype=np.int64)
-    # The two orthogonal cells a diagonal move passes between (no corner cutting).
-    side_a = np.array([-1, 1, -1, 1], dtype=np.int64)
-    side_b = np.array([-Wp, -Wp, Wp, Wp], dtype=np.int64)
-    # Targets: with stop_early, the search ends once every passable target is settled.
-    is_target = np.zeros(n if stop_early else 0, dtype=np.bool_)
+        return best
+    # Targets (padded flat indices): with stop_early, the search ends once every passable one is settled.
     remaining = 0
     if stop_early:
-        for t in targets:
-            v = (t // W + 1) * Wp + t % W + 1
+        for v in targets:
             if free[v] and not is_target[v]:
                 is_target[v] = True
                 remaining += 1
-    q_node = np.empty((2, H * W + 1), dtype=np.int64)
-    q_key = np.empty((2, H * W + 1), dtype=np.float32)
+    best[s] = 0.0
+    if stop_early and remaining == 0:
+        return best  # nothing to reach
     h0 = t0 = h1 = t1 = 0
     sqrt2 = np.float32(math.sqrt(2.0))
     one = np.float32(1.0)
-    best[s] = 0.0
-    if stop_early and remaining == 0:
-        return best.reshape((H + 2, Wp))  # nothing to reach
     q_node[0, 0] = s
     q_key[0, 0] = 0.0
     t0 = 1
@@ -143,40 +152,70 @@ def _two_queue_dijkstra(
             remaining -= 1
             if remaining == 0:
                 # Keys pop in order: cells at du or less are final; the rest of the queues is not.
-                for qi in range(2):
-                    for j in range(h0 if qi == 0 else h1, t0 if qi == 0 else t1):
-                        v = q_node[qi, j]
-                        if best[v] > du:
-                            best[v] = np.inf
+                for j in range(h0, t0):
+                    v = q_node[0, j]
+                    if best[v] > du:
+                        best[v] = np.inf
+                for j in range(h1, t1):
+                    v = q_node[1, j]
+                    if best[v] > du:
+                        best[v] = np.inf
                 break
+        up, down, left, right = free[u - Wp], free[u + Wp], free[u - 1], free[u + 1]
         nd = du + one
-        for k in range(4):
-            v = u + straight[k]
-            if free[v] and nd < best[v]:
+        for v, ok in ((u - Wp, up), (u + Wp, down), (u - 1, left), (u + 1, right)):
+            if ok and nd < best[v]:
                 best[v] = nd
                 q_node[0, t0] = v
                 q_key[0, t0] = nd
                 t0 += 1
+        # A diagonal move needs both orthogonal cells it passes between (no corner cutting).
         nd = du + sqrt2
-        for k in range(4):
-            v = u + diag[k]
-            if free[v] and nd < best[v] and free[u + side_a[k]] and free[u + side_b[k]]:
+        ul, ur, dl, dr = up and left, up and right, down and left, down and right
+        for v, ok in ((u - Wp - 1, ul), (u - Wp + 1, ur), (u + Wp - 1, dl), (u + Wp + 1, dr)):
+            if ok and free[v] and nd < best[v]:
                 best[v] = nd
                 q_node[1, t1] = v
                 q_key[1, t1] = nd
                 t1 += 1
-    return best.reshape((H + 2, Wp))
+    if stop_early:
+        for v in targets:
+            is_target[v] = False  # targets never settled (unreachable) stay marked otherwise
+    return best
 
 
 _NO_TARGETS = np.zeros(0, dtype=np.int64)
 
 
-def _search(passable: np.ndarray, sr: int, sc: int, targets: NDArray[np.int64] | None = None) -> NDArray[np.float32]:
-    """:func:`_two_queue_dijkstra` without its padding (a view); ``targets``: flat indices into
-    ``passable`` to stop at once all are reached (None: search everything)."""
-    if targets is None:
-        return _two_queue_dijkstra(passable, sr, sc, _NO_TARGETS, False)[1:-1, 1:-1]
-    return _two_queue_dijkstra(passable, sr, sc, targets, True)[1:-1, 1:-1]
+class _Searches:
+    """Searches from many sources over one grid: the padded grid built once, each thread's queues and
+    target marks allocated once and reused (:func:`_two_queue_dijkstra`)."""
+
+    def __init__(self, passable: np.ndarray, targets: NDArray[np.int64] | None = None) -> None:
+        self.h, self.w = int(passable.shape[0]), int(passable.shape[1])
+        self.wp = self.w + 2
+        self.free = _padded(np.ascontiguousarray(passable))
+        self.cap = int(np.count_nonzero(passable)) + 1
+        if targets is None:
+            self.targets, self.stop_early = _NO_TARGETS, False
+        else:
+            self.targets = (targets // self.w + 1) * self.wp + targets % self.w + 1
+            self.stop_early = True
+        self._scratch = threading.local()
+
+    def __call__(self, r: int, c: int) -> NDArray[np.float32]:
+        """``(h, w) float32`` distances from cell ``(r, c)`` of the grid (a view without the padding)."""
+        scratch = getattr(self._scratch, "arrays", None)
+        if scratch is None:
+            scratch = (
+                np.empty((2, self.cap), dtype=np.int32),
+                np.empty((2, self.cap), dtype=np.float32),
+                np.zeros(self.free.shape[0], dtype=np.bool_),
+            )
+            self._scratch.arrays = scratch
+        s = (r + 1) * self.wp + c + 1
+        best = _two_queue_dijkstra(self.free, self.wp, s, self.targets, self.stop_early, *scratch)
+        return best.reshape((self.h + 2, self.wp))[1:-1, 1:-1]
 
 
 def _flat_inside(targets_rc: NDArray[np.integer], r0: int, c0: int, shape: tuple[int, ...]) -> NDArray[np.int64]:
@@ -211,7 +250,7 @@ def distance_field(passable: BoolGrid, source_rc: GridRC) -> NDArray[np.float32]
     """
     if passable.dtype != np.bool_:
         passable = passable.astype(bool)
-    return np.ascontiguousarray(_search(np.ascontiguousarray(passable), int(source_rc[0]), int(source_rc[1])))
+    return np.ascontiguousarray(_Searches(passable)(int(source_rc[0]), int(source_rc[1])))
 
 
 def _crop(passable: BoolGrid) -> tuple[np.ndarray, int, int] | None:
@@ -255,12 +294,12 @@ def distance_fields(
     if cropped is None:
         return [Field(np.full((0, 0), np.inf, dtype=np.float32), 0, 0, shape) for _ in range(len(sources_rc))]
     crop, r0, c0 = cropped
-    flat = None if targets_rc is None else _flat_inside(targets_rc, r0, c0, crop.shape)
+    search = _Searches(crop, None if targets_rc is None else _flat_inside(targets_rc, r0, c0, crop.shape))
 
     def one(src: NDArray[np.integer]) -> Field:
         r, c = int(src[0]) - r0, int(src[1]) - c0
         if 0 <= r < crop.shape[0] and 0 <= c < crop.shape[1]:
-            return Field(_search(crop, r, c, flat), r0, c0, shape)
+            return Field(search(r, c), r0, c0, shape)
         return Field(np.full((0, 0), np.inf, dtype=np.float32), 0, 0, shape)
 
     return map_threads(one, list(sources_rc))  # the kernel releases the GIL
@@ -290,13 +329,13 @@ def distance_matrix(
     crop, r0, c0 = cropped
     tr, tc = targets[:, 0] - r0, targets[:, 1] - c0
     inside = (tr >= 0) & (tr < crop.shape[0]) & (tc >= 0) & (tc < crop.shape[1])
-    flat = tr[inside] * crop.shape[1] + tc[inside]
+    search = _Searches(crop, tr[inside] * crop.shape[1] + tc[inside])
 
     def row(src: NDArray[np.int64]) -> NDArray[np.float64]:
         d = np.full(len(targets), np.inf)
         r, c = int(src[0]) - r0, int(src[1]) - c0
         if 0 <= r < crop.shape[0] and 0 <= c < crop.shape[1]:
-            d[inside] = _search(crop, r, c, flat)[tr[inside], tc[inside]]
+            d[inside] = search(r, c)[tr[inside], tc[inside]]
         return d
 
     rows = map_threads(row, list(sources))
