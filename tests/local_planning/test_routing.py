@@ -130,3 +130,26 @@ def test_unreachable_cluster_gives_no_route() -> None:
     members = np.array([[1, 3], [1, 4], [2, 3]], dtype=np.int32)
     router = LocalRouter(LocalPlanningConfig(theta_members=1))
     assert router.route(passable, (2, 0), distance_field(passable, (2, 0)), members, 0.05) is None
+
+
+def test_a_router_remembers_only_what_its_inputs_fix() -> None:
+    # Walls from the frontier row down lengthen the paths between sub-clusters: a router that routed
+    # the open corridor before must not reuse those distances, and must reuse them for the same map.
+    open_ = state_grid(CORRIDOR) == CellState.FREE
+    walled = open_.copy()
+    walled[1:3, [13, 28]] = False
+    members = np.array([[1, c] for c in range(42) if c not in (13, 28)], dtype=np.int32)
+    robot = (3, 1)
+    cfg = LocalPlanningConfig(theta_members=10, sub_bandwidth_m=0.4)
+    router = LocalRouter(cfg)
+
+    def route(r: LocalRouter, passable: np.ndarray) -> tuple[list[list[int]], float]:
+        out = r.route(passable, robot, distance_field(passable, robot), members, 0.05)
+        assert out is not None
+        return out.targets_rc.tolist(), out.utility
+
+    first = route(router, open_)
+    assert route(router, open_) == first
+    walled_fresh = route(LocalRouter(cfg), walled)
+    assert walled_fresh[1] != first[1]  # the walls do change the route's utility
+    assert route(router, walled) == walled_fresh
