@@ -216,6 +216,9 @@ class PreprocessConfig(_Checked):
     """Mean-Shift bandwidth as this percentile of pairwise frontier distances (paper: 15), in (0, 100]."""
     bandwidth_sample: int = 1000
     """At most this many frontier cells (an even stride over them) enter the percentile, >= 2."""
+    split_for_team: bool = False
+    """Where robots outnumber the Mean-Shift clusters, split the largest until there is one per robot
+    (:func:`~mrexplore.preprocessing.clustering.split_for_team`); False: the paper's clusters, robots share."""
 
     def _validate(self) -> None:
         _require(

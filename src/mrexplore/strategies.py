@@ -20,7 +20,7 @@ from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, Assignmen
 from mrexplore.local_planning.router import LocalRouter
 from mrexplore.maps.ground_truth import GroundTruthMap, explorable_region
 from mrexplore.paths.distance_field import Field, descend_path, distance_fields, distance_matrix, distances_at
-from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers
+from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers, split_for_team
 from mrexplore.preprocessing.frontiers import Frontiers, detect_frontiers
 from mrexplore.types import BoolGrid, CellState, MrExploreError, StateGrid
 
@@ -239,7 +239,10 @@ class ExplorationPipeline:
         un_rc = q.frontiers.un_rc
         if q.blacklist is not None and len(un_rc):
             un_rc = un_rc[~q.blacklist[un_rc[:, 0], un_rc[:, 1]]]
-        return CandidateSet(cluster_frontiers(un_rc, self.preprocess))
+        clusters = cluster_frontiers(un_rc, self.preprocess)
+        if self.preprocess.split_for_team:
+            clusters = split_for_team(clusters, len(q.robots_rc), self.preprocess.min_cluster_size)
+        return CandidateSet(clusters)
 
     def route(self, i: int, k: int, problem: AssignmentProblem, work: _Posed) -> NDArray[np.int32]:
         """Robot i's targets in its assigned candidate k: its current route where it keeps the cluster

@@ -10,7 +10,14 @@ from scipy.spatial.distance import pdist
 from sklearn.cluster import MeanShift, get_bin_seeds
 
 from mrexplore.config import PreprocessConfig
-from mrexplore.preprocessing.clustering import adaptive_bandwidth, bin_seeds, cluster_frontiers, mean_shift
+from mrexplore.preprocessing.clustering import (
+    Clusters,
+    adaptive_bandwidth,
+    bin_seeds,
+    cluster_frontiers,
+    mean_shift,
+    split_for_team,
+)
 
 
 def test_two_frontier_segments_and_a_stray_cell() -> None:
@@ -76,3 +83,33 @@ def test_centres_are_members() -> None:
     assert all(tuple(ctr) in members for ctr in c.centers_rc.tolist())
     for k in range(len(c)):
         assert c.sizes[k] == len(c.members_of(k)) and tuple(c.centers_rc[k]) in map(tuple, c.members_of(k))
+
+
+def _one_cluster(cells: list[tuple[int, int]], centre: int = 0) -> Clusters:
+    pts = np.array(cells, dtype=np.int32)
+    return Clusters(pts[centre : centre + 1], np.array([len(pts)], np.int32), pts, np.zeros(len(pts), np.int32))
+
+
+def test_split_for_team_cuts_the_largest_cluster_along_its_axis() -> None:
+    # An L: 8 cells down column 0 and 4 along row 7; two clusters already for 3 robots.
+    ell = [(r, 0) for r in range(8)] + [(7, c) for c in range(1, 5)]
+    far = [(20, 20), (20, 21)]
+    pts = np.array(ell + far, dtype=np.int32)
+    labels = np.array([0] * len(ell) + [1] * len(far), np.int32)
+    two = Clusters(np.array([[7, 0], [20, 20]], np.int32), np.array([12, 2], np.int32), pts, labels)
+    three = split_for_team(two, 3, 2)
+    # The L's 12 members, projected on their principal axis, split 6 / 6: the top of the column and
+    # the corner with the row; each half's centre is its member nearest its mean.
+    assert three.sizes.tolist() == [6, 6, 2]
+    assert three.centers_rc.tolist() == [[2, 0], [7, 2], [20, 20]]
+    halves = [set(map(tuple, three.members_of(k).tolist())) for k in range(3)]
+    assert halves[0] == {(r, 0) for r in range(6)}
+    assert halves[2] == set(far)
+
+
+def test_split_for_team_leaves_enough_clusters_and_small_ones_alone() -> None:
+    one = _one_cluster([(0, c) for c in range(3)])
+    assert split_for_team(one, 1, 2) is one  # clusters suffice
+    assert split_for_team(one, 4, 2).sizes.tolist() == [3]  # 3 < 2 x 2 members: not split
+    four = split_for_team(_one_cluster([(0, c) for c in range(8)]), 4, 2)
+    assert four.sizes.tolist() == [2, 2, 2, 2] and four.centers_rc[:, 1].tolist() == [0, 2, 4, 6]

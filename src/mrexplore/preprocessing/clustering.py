@@ -12,7 +12,7 @@ from scipy.spatial.distance import pdist
 
 from mrexplore.config import PreprocessConfig
 
-__all__ = ["Clusters", "adaptive_bandwidth", "cluster_frontiers", "mean_shift"]
+__all__ = ["Clusters", "adaptive_bandwidth", "cluster_frontiers", "mean_shift", "split_for_team"]
 
 
 @dataclass(frozen=True)
@@ -186,3 +186,55 @@ def _nearest_member(members: NDArray[np.float64], mode: NDArray[np.float64]) -> 
     """The member nearest to a Mean-Shift mode: modes may fall in walls or unknown space (paper IV-A)."""
     d2 = ((members - mode) ** 2).sum(axis=1)
     return [int(v) for v in members[int(np.argmin(d2))]]
+
+
+def split_for_team(clusters: Clusters, robots: int, min_cluster_size: int) -> Clusters:
+    """Clusters split until there is one per robot, where robots outnumber them.
+
+    Mean-Shift's bandwidth (a percentile of pairwise distances) gives about as many clusters for 16
+    robots as for 3; robots sharing a cluster then route through the same sub-clusters. Here the cluster
+    with the most members is cut in two at the median of its members along their principal axis, each
+    half's centre snapped to its member nearest the half's mean, until ``robots`` clusters exist or no
+    cluster has ``2 * min_cluster_size`` members. Unchanged when clusters suffice.
+
+    Examples
+    --------
+    >>> pts = np.array([[0, c] for c in range(8)], dtype=np.int32)
+    >>> one = Clusters(pts[3:4], np.array([8], np.int32), pts, np.zeros(8, np.int32))
+    >>> two = split_for_team(one, 2, 2)
+    >>> two.centers_rc.tolist(), two.sizes.tolist(), two.labels.tolist()
+    ([[0, 1], [0, 5]], [4, 4], [0, 0, 0, 0, 1, 1, 1, 1])
+    """
+    if len(clusters) >= robots or len(clusters) == 0:
+        return clusters
+    members = clusters.members_rc
+    labels = clusters.labels.astype(np.int64).copy()
+    centers = [tuple(int(v) for v in c) for c in clusters.centers_rc]
+    while len(centers) < robots:
+        sizes = np.bincount(labels, minlength=len(centers))
+        k = int(np.argmax(sizes))  # the first of the largest: deterministic
+        if sizes[k] < 2 * min_cluster_size:
+            break
+        idx = np.flatnonzero(labels == k)
+        pts = members[idx].astype(np.float64)
+        centred = pts - pts.mean(axis=0)
+        axis = np.linalg.eigh(centred.T @ centred)[1][:, -1]  # principal axis
+        if axis[0] < 0 or (axis[0] == 0 and axis[1] < 0):
+            axis = -axis  # one sign, whatever LAPACK returns
+        order = np.argsort(centred @ axis, kind="stable")
+        # Each half in member order, so that ties of the nearest member go to the first listed.
+        halves = (np.sort(idx[order[: len(idx) // 2]]), np.sort(idx[order[len(idx) // 2 :]]))
+        labels[halves[1]] = len(centers)
+        centers[k] = tuple(_nearest_member(members[halves[0]].astype(np.float64), members[halves[0]].mean(axis=0)))
+        centers.append(tuple(_nearest_member(members[halves[1]].astype(np.float64), members[halves[1]].mean(axis=0))))
+    # Renumber in the row-major order of the centres, as cluster_frontiers does.
+    rank = sorted(range(len(centers)), key=lambda j: centers[j])
+    remap = np.empty(len(centers), dtype=np.int64)
+    remap[rank] = np.arange(len(centers))
+    new_labels = remap[labels]
+    return Clusters(
+        np.array([centers[j] for j in rank], dtype=np.int32).reshape(-1, 2),
+        np.bincount(new_labels, minlength=len(centers)).astype(np.int32),
+        members,
+        new_labels.astype(np.int32),
+    )
