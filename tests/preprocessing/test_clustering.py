@@ -12,6 +12,8 @@ from sklearn.cluster import MeanShift, get_bin_seeds
 from mrexplore.config import PreprocessConfig
 from mrexplore.preprocessing.clustering import (
     Clusters,
+    _disc_sum,
+    _RowIndex,
     adaptive_bandwidth,
     bin_seeds,
     cluster_frontiers,
@@ -61,6 +63,35 @@ def test_mean_shift_equals_sklearn(seed: int, n: int, extent: int, tie_free: boo
     modes, labels = mean_shift(pts, bw)
     np.testing.assert_allclose(modes, ref.cluster_centers_)
     np.testing.assert_array_equal(labels, ref.labels_)
+
+
+def test_disc_sums_by_hand() -> None:
+    pts = np.array([[0, 0], [0, 1], [0, 2], [1, 0], [3, 3]], dtype=float)
+    rows = _RowIndex(pts)
+    # Radius 1 around (0, 0): itself, (0, 1) and (1, 0); (0, 2) is 2 away.
+    assert _disc_sum(rows.starts, rows.cols, rows.prefix, rows.r0, 0.0, 0.0, 1.0) == (3, 1.0, 1.0)
+    # Radius 2 around (0.5, 1): all but (3, 3) (distance sqrt(10.25)).
+    assert _disc_sum(rows.starts, rows.cols, rows.prefix, rows.r0, 0.5, 1.0, 2.0) == (4, 1.0, 3.0)
+    # Radius 2 around (3, 1): only (3, 3), exactly on the rim; (1, 0) is sqrt(5) away.
+    assert _disc_sum(rows.starts, rows.cols, rows.prefix, rows.r0, 3.0, 1.0, 2.0) == (1, 3.0, 3.0)
+    assert _disc_sum(rows.starts, rows.cols, rows.prefix, rows.r0, 9.0, 9.0, 2.0) == (0, 0.0, 0.0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10**6), st.integers(1, 120), st.floats(0.5, 12.0))
+def test_disc_sums_equal_brute_force(seed: int, n: int, radius: float) -> None:
+    rng = np.random.default_rng(seed)
+    pts = rng.integers(-20, 20, (n, 2)).astype(float)  # repeats too
+    rows = _RowIndex(pts)
+    for y, x in rng.uniform(-25, 25, (10, 2)):
+        inside = pts[(pts[:, 0] - y) ** 2 + (pts[:, 1] - x) ** 2 <= radius * radius]
+        expected = (len(inside), float(inside[:, 0].sum()), float(inside[:, 1].sum()))
+        assert _disc_sum(rows.starts, rows.cols, rows.prefix, rows.r0, y, x, radius) == expected
+
+
+def test_mean_shift_needs_cells() -> None:
+    with pytest.raises(ValueError, match="mean_shift needs points on integer coordinates"):
+        mean_shift(np.array([[0.5, 0.0], [1.0, 1.0]]), 1.0)
 
 
 @pytest.mark.filterwarnings("ignore:Binning data failed")
