@@ -10,11 +10,13 @@ large as the map, this is what each decision pays for its fields.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 
 import numpy as np
 
 from mrexplore.boxes import cells_of
+from mrexplore.cli import run_script
 from mrexplore.config import MapConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.paths.distance_field import distance_fields
@@ -42,4 +44,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_script(main))

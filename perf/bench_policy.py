@@ -14,6 +14,7 @@ import time
 
 import numpy as np
 
+from mrexplore.cli import run_script
 from mrexplore.config import MissionConfig, SimConfig
 from mrexplore.global_planning.learned.checkpoint import load_policy
 from mrexplore.global_planning.learned.policy import LearnedPlanner
@@ -83,4 +84,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_script(main))

@@ -16,6 +16,7 @@ import time
 
 import numpy as np
 
+from mrexplore.cli import run_script
 from mrexplore.config import LocalPlanningConfig
 from mrexplore.local_planning.routing import RouteProblem, reversal_search
 
@@ -63,4 +64,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_script(main))

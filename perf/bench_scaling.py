@@ -24,6 +24,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_step_and_decision import bench  # noqa: E402
 
+from mrexplore.cli import run_script  # noqa: E402
+
 KTH = Path(__file__).resolve().parents[2] / "shared" / "maps" / "kth_floorplans"
 
 
@@ -114,4 +116,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_script(main))

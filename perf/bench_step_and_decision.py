@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mrexplore.cli import run_script
 from mrexplore.config import MapConfig, MissionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission
@@ -90,4 +91,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_script(main))

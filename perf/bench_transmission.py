@@ -19,6 +19,7 @@ import numpy as np
 from bench_step_and_decision import HOUSEEXPO, largest_houseexpo
 from scipy import ndimage
 
+from mrexplore.cli import run_script
 from mrexplore.config import MissionConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import run_mission
@@ -101,4 +102,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_script(main))

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from mrexplore.bench.report import paired_bootstrap
+from mrexplore.cli import run_script
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig, TrainConfig
 from mrexplore.global_planning.learned.expert import candidate_assignments, lookahead_returns
 from mrexplore.global_planning.protocol import Assignment
@@ -83,4 +84,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_script(main))

@@ -18,6 +18,7 @@ import numpy as np
 from mrexplore.bench.report import paired_bootstrap
 from mrexplore.bench.runner import read_rows
 from mrexplore.cli import main as cli
+from mrexplore.cli import run_script
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "maps"
@@ -93,4 +94,4 @@ def _key(r: dict[str, str]) -> tuple[str, str, str]:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_script(main))

@@ -27,6 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "maps"))
 from conftest import SHARED_MAPS  # noqa: E402
 from test_fuzz_inputs import FUZZ_CFG, load_outcome, mutate, mutated_copy  # noqa: E402
 
+from mrexplore.cli import run_script
 from mrexplore.global_planning.learned.checkpoint import default_policy_path, load_policy  # noqa: E402
 from mrexplore.maps.loaders import load_map  # noqa: E402
 from mrexplore.preprocessing.sparse_codec import decode, encode  # noqa: E402
@@ -127,4 +128,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_script(main))

@@ -15,10 +15,12 @@ from __future__ import annotations
 import argparse
 import cProfile
 import pstats
+import sys
 import time
 
 import numpy as np
 
+from mrexplore.cli import run_script
 from mrexplore.config import MapConfig, MissionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission
@@ -71,4 +73,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_script(main))

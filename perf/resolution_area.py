@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from mrexplore.bench.runner import expand_maps
+from mrexplore.cli import run_script
 from mrexplore.config import MapConfig
 from mrexplore.maps.ground_truth import explorable_region
 from mrexplore.maps.loaders import load_map
@@ -48,4 +49,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_script(main))

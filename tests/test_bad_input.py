@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import math
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -271,3 +273,14 @@ def test_hostile_policy_files(tmp_path, capsys) -> None:
     )
     assert main(["explore", "--map", "generated:3", *FAST, "--policy", str(tmp_path / "huge.pt")]) == 2
     assert "does not fit this network" in _err(capsys)
+
+
+@pytest.mark.parametrize("script", ["profile_decision.py", "bench_step_and_decision.py", "bench_fields.py"])
+def test_perf_scripts_give_one_line_on_bad_input(script: str) -> None:
+    perf = Path(__file__).resolve().parents[1] / "perf"
+    out = subprocess.run(
+        [sys.executable, str(perf / script), "--map", "no_such_map.yaml"], capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 2
+    fix = "pass an existing map file with --map"
+    assert out.stderr == f"{script}: error: map file not found: no_such_map.yaml; {fix}\n"

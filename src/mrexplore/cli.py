@@ -7,7 +7,7 @@ import json
 import math
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, NoReturn
@@ -537,6 +537,33 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("mrexplore: interrupted; finished results are kept, rerun the command to go on", file=sys.stderr)
         return EXIT_INTERRUPTED
     return 0
+
+
+def run_script(script_main: Callable[[], int | None], name: str | None = None) -> int:
+    """Run a script's ``main`` (the ``perf/`` tools) as the ``mrexplore`` command runs: bad input is one
+    line naming the problem and the fix with exit code 2, an interrupt exit code 130, no traceback.
+    ``name`` (default: the script's file name) starts the error line.
+
+    Examples
+    --------
+    >>> def bad() -> int:
+    ...     raise MrExploreError("map file not found: x.yaml; pass an existing map file with --map")
+    >>> import contextlib, io
+    >>> err = io.StringIO()
+    >>> with contextlib.redirect_stderr(err):
+    ...     code = run_script(bad, "bench_x.py")
+    >>> code, err.getvalue().strip()
+    (2, 'bench_x.py: error: map file not found: x.yaml; pass an existing map file with --map')
+    """
+    name = name or Path(sys.argv[0]).name
+    try:
+        return int(script_main() or 0)
+    except MrExploreError as exc:
+        print(f"{name}: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print(f"{name}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":
