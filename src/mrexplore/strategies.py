@@ -215,14 +215,16 @@ class ExplorationPipeline:
     ) -> dict[int, tuple[int, NDArray[np.int32]]]:
         """Robots whose goal is still a member of a cluster: ``{robot: (cluster, route)}``; discounts
         ``dist`` in place for those pairs (goal hysteresis)."""
-        where = {(int(r), int(c)): int(k) for (r, c), k in zip(clusters.members_rc, clusters.labels, strict=True)}
+        members = clusters.members_rc
         kept: dict[int, tuple[int, NDArray[np.int32]]] = {}
         for i, route in enumerate(current):
             if len(route) == 0:
                 continue
-            k = where.get((int(route[0, 0]), int(route[0, 1])))
-            if k is None:
+            # The goal's member row (a dict of every member cost a millisecond a decision on a large map).
+            hit = np.flatnonzero((members[:, 0] == route[0, 0]) & (members[:, 1] == route[0, 1]))
+            if len(hit) == 0:
                 continue
+            k = int(clusters.labels[hit[-1]])
             d_goal = fields[i].value(route[0, 0], route[0, 1])
             if np.isfinite(d_goal):
                 dist[i, k] = min(dist[i, k], self.commitment * d_goal)
