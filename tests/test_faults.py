@@ -19,6 +19,9 @@ from mrexplore.types import CellState, MrExploreError
 
 REAL_MAPS = ("houseexpo/json/0a1b29dba355df2ab02630133187bfab.json", "dungeon/easy_img_15.png")
 STRATEGIES = ("utility", "hier")
+FINISHED = ("no_frontiers", "no_reachable_frontiers")
+"""A mission that ended by itself: no frontier left, or none the team can reach (a 2-cell piece seen
+through a gap, say)."""
 
 
 @pytest.fixture(scope="module")
@@ -59,7 +62,7 @@ def test_one_robot_of_three_lost_mid_mission_the_others_finish(real_maps, strate
             seen_after.append(decision.assignment.cluster_of_robot.copy())
             where_after.append(mission.sim.positions_rc[1].tolist())
     m = mission.result().measures
-    assert m.coverage >= 0.99 and m.done_reason == "no_frontiers"
+    assert m.coverage >= 0.99 and m.done_reason in FINISHED
     assert m.robots_failed == 1 and not mission.sim.alive[1]
     # The centre stops assigning to the silent robot after silence_rounds rounds (3), and never again.
     assert len(seen_after) > 3
@@ -71,7 +74,7 @@ def test_one_robot_of_three_lost_mid_mission_the_others_finish(real_maps, strate
 @pytest.mark.parametrize("which", [0, 1])
 def test_thirty_percent_message_loss_still_explores(real_maps, strategy: str, which: int) -> None:
     m = _run(real_maps[which], strategy, FaultConfig(message_loss=0.3)).measures
-    assert m.coverage >= 0.99 and m.done_reason == "no_frontiers"
+    assert m.coverage >= 0.99 and m.done_reason in FINISHED
     assert m.messages_lost > 0 and m.acks_lost > 0 and m.bytes_lost > 0
     # Every robot tries once a round; an unacknowledged robot sends its whole map, so no delta is refused.
     assert m.messages_sent == 3 * m.rounds and m.messages_resent == 0
@@ -82,16 +85,17 @@ def test_thirty_percent_message_loss_still_explores(real_maps, strategy: str, wh
 def test_centre_restart_rebuilds_from_the_next_messages(real_maps, strategy: str, which: int) -> None:
     clean = _run(real_maps[which], strategy, FaultConfig()).measures
     m = _run(real_maps[which], strategy, FaultConfig(centre_restarts=(clean.steps // 3,))).measures
-    assert m.coverage >= 0.99 and m.done_reason == "no_frontiers"
-    # The restarted centre holds no base: each robot's next delta is refused and its whole map resent once.
-    assert m.centre_restarts == 1 and m.messages_resent == 3 and m.messages_lost == 0
+    assert m.coverage >= 0.99 and m.done_reason in FINISHED
+    # The restarted centre holds no base: each robot's next delta is refused and its whole map resent once
+    # (a robot whose delta was no smaller than its whole map sent the whole map, which needs no resend).
+    assert m.centre_restarts == 1 and 1 <= m.messages_resent <= 3 and m.messages_lost == 0
 
 
 @pytest.mark.parametrize("strategy", STRATEGIES)
 def test_robots_out_of_radio_range_explore_alone_and_sync(real_maps, strategy: str) -> None:
     clean = _run(real_maps[1], strategy, FaultConfig()).measures
     m = _run(real_maps[1], strategy, FaultConfig(comm_range_m=6.0)).measures
-    assert m.coverage >= 0.99 and m.done_reason == "no_frontiers"
+    assert m.coverage >= 0.99 and m.done_reason in FINISHED
     assert m.messages_sent < 3 * m.rounds  # some rounds found a robot out of range
     assert clean.messages_sent == 3 * clean.rounds
 
@@ -109,7 +113,7 @@ def test_robots_out_of_radio_range_explore_alone_and_sync(real_maps, strategy: s
 )
 def test_every_strategy_keeps_working_under_each_fault(small_map, strategy: str, faults: FaultConfig) -> None:
     m = _run(small_map, strategy, faults, robots=2).measures
-    assert m.coverage >= 0.99 and m.done_reason == "no_frontiers"
+    assert m.coverage >= 0.99 and m.done_reason in FINISHED
 
 
 def test_the_oracle_runs_under_faults(small_map) -> None:
@@ -268,7 +272,7 @@ def test_rounds_where_the_centre_hears_nobody_pose_nothing_and_the_mission_goes_
             idle += not mission.done
             continue
         mission.commit()
-    assert idle > 0 and mission.done_reason == "no_frontiers" and mission.sim.coverage >= 0.99
+    assert idle > 0 and mission.done_reason in FINISHED and mission.sim.coverage >= 0.99
     env = DecisionEnv(small_map, make_strategy("utility"), SimConfig(robots=1), cfg)
     problem, info = env.reset(seed=0)
     done = False

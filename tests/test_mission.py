@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from conftest import state_grid
 
-from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig
+from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, PreprocessConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import run_mission
 from mrexplore.strategies import make_strategy
@@ -99,6 +99,24 @@ def test_commitment_keeps_a_robot_on_its_goal(commitment: float, goal: list[int]
 def test_commitment_defaults() -> None:
     assert make_strategy("utility").commitment == 0.5 and make_strategy("nearest").commitment == 0.5
     assert make_strategy("hier").commitment == 1.0
+
+
+@pytest.mark.parametrize(
+    ("drop", "members"), [(False, [[1, 1], [2, 1], [3, 1], [3, 5], [3, 7]]), (True, [[1, 1], [2, 1], [3, 1]])]
+)
+def test_frontier_specks_are_dropped_before_clustering(drop: bool, members: list[list[int]]) -> None:
+    # F_un: the left column (one 8-connected piece of 3 cells) and two single cells over the gaps in the
+    # bottom wall, 2 columns apart (two pieces of 1). The 100th percentile makes one cluster of all F_un.
+    state = state_grid("""
+        #########
+        ?.......#
+        ?.......#
+        ?.......#
+        #####?#?#
+    """)
+    cfg = PreprocessConfig(bandwidth_percentile=100.0, drop_specks=drop)
+    d = make_strategy("utility", preprocess_cfg=cfg).decide(state, np.array([[2, 4]], np.int32), 0.05)
+    assert d.clusters.members_rc.tolist() == members and d.clusters.sizes.tolist() == [len(members)]
 
 
 def test_no_frontier_ends_the_mission_by_decision() -> None:

@@ -216,6 +216,12 @@ class PreprocessConfig(_Checked):
     """Mean-Shift bandwidth as this percentile of pairwise frontier distances (paper: 15), in (0, 100]."""
     bandwidth_sample: int = 1000
     """At most this many frontier cells (an even stride over them) enter the percentile, >= 2."""
+    drop_specks: bool = True
+    """Before Mean-Shift, drop 8-connected pieces of F_un under ``min_cluster_size`` cells (the rule CoScan's
+    and NCM's candidates follow), so every strategy ends on the same frontiers; False: the paper's rule
+    alone (clusters under ``min_cluster_size`` members dropped after clustering), under which Mean-Shift
+    gathers lone frontier cells near each other into clusters and robots chase them at the end of a
+    mission."""
     split_for_team: bool = False
     """Where robots outnumber the Mean-Shift clusters, split the largest until there is one per robot
     (:func:`~mrexplore.preprocessing.clustering.split_for_team`); False: the paper's clusters, robots share."""

@@ -238,9 +238,12 @@ class ExplorationPipeline:
 
     def candidates(self, q: CandidateQuery) -> CandidateSet:
         """Layer 1's candidates: F_un (less blacklisted cells) clustered by Mean-Shift (paper IV-A)."""
-        un_rc = q.frontiers.un_rc
-        if q.blacklist is not None and len(un_rc):
-            un_rc = un_rc[~q.blacklist[un_rc[:, 0], un_rc[:, 1]]]
+        if self.preprocess.drop_specks:
+            un_rc = cells_of(_denoised_un(q.frontiers, q.blacklist, self.preprocess.min_cluster_size)).astype(np.int32)
+        else:
+            un_rc = q.frontiers.un_rc
+            if q.blacklist is not None and len(un_rc):
+                un_rc = un_rc[~q.blacklist[un_rc[:, 0], un_rc[:, 1]]]
         clusters = cluster_frontiers(un_rc, self.preprocess)
         if self.preprocess.split_for_team:
             clusters = split_for_team(clusters, len(q.robots_rc), self.preprocess.min_cluster_size)
