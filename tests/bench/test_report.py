@@ -88,6 +88,19 @@ def test_paired_table_pairs_episodes_of_the_same_map_team_and_seed() -> None:
     assert "| dungeon large | +10.0 [+10.0, +10.0] | +0.00 | 2 |" in table  # seed 2 has no pair
 
 
+def test_paired_table_at_equal_coverage_reads_steps_to_99() -> None:
+    def row(strategy: str, seed: int, steps: int, to99: str) -> dict[str, str]:
+        return {"map_path": "m", "robots": "3", "seed": str(seed), "strategy": strategy, "steps": str(steps),
+                "steps_to_99": to99, "coverage": "1.0", "dataset": "dungeon", "size_class": "large"}  # fmt: skip
+
+    # a ends later (90 against 80 and 100: 0% fewer) but reaches 99% sooner (60 against 75); b's seed-1
+    # episode never got to 99% and counts with its 100 steps: 60 against (75 + 100) / 2 = 87.5, 31.4% fewer.
+    rows = [row("a", 0, 90, "60"), row("b", 0, 80, "75"), row("a", 1, 90, "60"), row("b", 1, 100, "")]
+    assert "| dungeon large | +0.0 [" in paired_table(rows, "a", ["a", "b"])
+    table = paired_table(rows, "a", ["a", "b"], metric="steps_to_99")
+    assert "| dungeon large | +31.4 [+20.0, +40.0] | +0.00 | 2 |" in table
+
+
 def test_every_learned_strategy_gets_its_paired_section() -> None:
     from mrexplore.bench.report import _focuses
 
