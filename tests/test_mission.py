@@ -5,11 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from conftest import state_grid
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import ndimage
 
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, PreprocessConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import run_mission
-from mrexplore.strategies import make_strategy
+from mrexplore.preprocessing.frontiers import Frontiers
+from mrexplore.strategies import _denoised_un, make_strategy
 from mrexplore.types import MrExploreError
 
 TIMING_KEYS = {"wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb"}
@@ -170,3 +174,17 @@ def test_vanished_goals_wait_min_replan_steps(small_map, k: int) -> None:
 def test_bad_min_replan_steps_refused() -> None:
     with pytest.raises(MrExploreError, match=r"^min_replan_steps must be >= 1, got 0$"):
         MissionConfig(min_replan_steps=0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10**6), st.integers(1, 4), st.booleans())
+def test_specks_dropped_in_the_box_as_on_the_whole_grid(seed: int, min_size: int, blacklisted: bool) -> None:
+    rng = np.random.default_rng(seed)
+    un = np.zeros((30, 40), bool)
+    un[5:25, 8:30] = rng.random((20, 22)) < 0.3  # pieces of every size inside a box of the grid
+    blacklist = rng.random(un.shape) < 0.1 if blacklisted else None
+    expected = un & ~blacklist if blacklist is not None else un.copy()
+    labels, _ = ndimage.label(expected, structure=np.ones((3, 3)))
+    expected &= np.bincount(labels.ravel())[labels] >= min_size
+    got = _denoised_un(Frontiers(un, np.zeros_like(un)), blacklist, min_size)
+    assert np.array_equal(got, expected)

@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
-from mrexplore.boxes import cells_of
+from mrexplore.boxes import cells_of, mask_box
 from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig, SimConfig
 from mrexplore.global_planning.classical import GeodesicPlanner, NearestPlanner, UtilityPlanner
 from mrexplore.global_planning.coscan import cap_tasks, lloyd_clusters, sample_tasks, two_opt_tour
@@ -368,9 +368,18 @@ def _denoised_un(frontiers: Frontiers, blacklist: BoolGrid | None, min_size: int
     un = frontiers.un_mask.copy()
     if blacklist is not None:
         un &= ~blacklist
-    labels, _ = ndimage.label(un, structure=np.ones((3, 3)))
-    counts = np.bincount(labels.ravel())
-    un &= counts[labels] >= min_size
+    box = mask_box(un)
+    if box is None:
+        return un
+    # Labelled in the frontier cells' box, sizes counted at the frontier cells only: on a KTH floor at
+    # 0.05 m, labelling and indexing the whole 4.9 M-cell grid cost 35 ms a decision.
+    r0, r1, c0, c1 = box
+    sub = un[r0:r1, c0:c1]
+    labels, _ = ndimage.label(sub, structure=np.ones((3, 3)))
+    rows, cols = np.nonzero(sub)
+    piece = labels[rows, cols]
+    small = np.bincount(piece)[piece] < min_size
+    sub[rows[small], cols[small]] = False
     return un
 
 
