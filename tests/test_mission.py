@@ -178,7 +178,7 @@ def test_bad_min_replan_steps_refused() -> None:
 
 @settings(max_examples=60, deadline=None)
 @given(st.integers(0, 10**6), st.integers(1, 4), st.booleans())
-def test_specks_dropped_in_the_box_as_on_the_whole_grid(seed: int, min_size: int, blacklisted: bool) -> None:
+def test_specks_dropped_sparsely_as_on_the_whole_grid(seed: int, min_size: int, blacklisted: bool) -> None:
     rng = np.random.default_rng(seed)
     un = np.zeros((30, 40), bool)
     un[5:25, 8:30] = rng.random((20, 22)) < 0.3  # pieces of every size inside a box of the grid
@@ -187,4 +187,4 @@ def test_specks_dropped_in_the_box_as_on_the_whole_grid(seed: int, min_size: int
     labels, _ = ndimage.label(expected, structure=np.ones((3, 3)))
     expected &= np.bincount(labels.ravel())[labels] >= min_size
     got = _denoised_un(Frontiers(un, np.zeros_like(un)), blacklist, min_size)
-    assert np.array_equal(got, expected)
+    assert got.tolist() == np.argwhere(expected).tolist()
