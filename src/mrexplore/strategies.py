@@ -237,12 +237,8 @@ class ExplorationPipeline:
 
     def candidates(self, q: CandidateQuery) -> CandidateSet:
         """Layer 1's candidates: F_un (less blacklisted cells) clustered by Mean-Shift (paper IV-A)."""
-        if self.preprocess.drop_specks:
-            un_rc = _denoised_un(q.frontiers, q.blacklist, self.preprocess.min_cluster_size).astype(np.int32)
-        else:
-            un_rc = q.frontiers.un_rc
-            if q.blacklist is not None and len(un_rc):
-                un_rc = un_rc[~q.blacklist[un_rc[:, 0], un_rc[:, 1]]]
+        speck = self.preprocess.min_cluster_size if self.preprocess.drop_specks else 1  # 1: none dropped
+        un_rc = _denoised_un(q.frontiers, q.blacklist, speck).astype(np.int32)
         clusters = cluster_frontiers(un_rc, self.preprocess)
         if self.preprocess.split_for_team:
             clusters = split_for_team(clusters, len(q.robots_rc), self.preprocess.min_cluster_size)
@@ -362,8 +358,8 @@ class ExplorationPipeline:
 
 def _denoised_un(frontiers: Frontiers, blacklist: BoolGrid | None, min_size: int) -> NDArray[np.int64]:
     """``(n, 2)`` F_un cells, row-major, less blacklisted cells and less 8-connected pieces under
-    ``min_size`` cells: the noise rule of every strategy's candidates (``preprocess.drop_specks``), so that
-    every strategy ends on the same frontiers.
+    ``min_size`` cells (1: none): the noise rule of every strategy's candidates (the Mean-Shift ones'
+    under ``preprocess.drop_specks``), so that every strategy ends on the same frontiers.
 
     Sparse: the pieces are labelled in the frontier cells' bounding box only; full-grid passes (copy,
     blacklist, labelling, indexing) cost 35 ms a decision on a KTH floor at 0.05 m.
