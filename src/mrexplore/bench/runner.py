@@ -139,8 +139,8 @@ def size_class(free_area_m2: float) -> str:
 
 
 def dataset_of(map_path: str) -> str:
-    """The collection a map comes from, by a folder name on its path (``generated`` for built-in maps)."""
-    if map_path.startswith("generated"):
+    """The collection a map comes from, by a folder name on its path (``generated`` for procedural plans)."""
+    if map_path.startswith(("generated", "varied:")):
         return "generated"
     parts = [p.lower() for p in Path(map_path).parts[:-1]]
     for name in _DATASETS:

@@ -51,7 +51,8 @@ def load_map(spec: str | Path, cfg: MapConfig | None = None) -> GroundTruthMap:
     ----------
     spec:
         A ``.yaml`` (ROS map_server), an image (grayscale render or DungeonMaps RGB), a HouseExpo
-        ``.json``, or ``generated:SEED`` for the built-in procedural floor plan.
+        ``.json``, ``generated:SEED`` for the built-in procedural floor plan, or ``varied:SEED`` for
+        one whose size, outline, rooms, corridor and clutter the seed draws too (the training plans).
     cfg:
         Working resolution and pixel size of images without YAML.
 
@@ -94,9 +95,10 @@ def load_map(spec: str | Path, cfg: MapConfig | None = None) -> GroundTruthMap:
 
 
 def is_generator_spec(text: str) -> bool:
-    """Whether ``text`` names the procedural generator (``generated`` or ``generated:SEED``) rather than a
-    file: an existing file of that name is always read as the file."""
-    return (text == "generated" or text.startswith("generated:")) and not Path(text).exists()
+    """Whether ``text`` names the procedural generator (``generated``, ``generated:SEED`` or ``varied:SEED``)
+    rather than a file: an existing file of that name is always read as the file."""
+    named = text == "generated" or text.startswith(("generated:", "varied:"))
+    return named and not Path(text).exists()
 
 
 def _check_cells(name: str, extent_px: tuple[int, int], pixel_m: float, cfg: MapConfig) -> None:
@@ -133,18 +135,18 @@ def _finish(
 
 
 def _load_generated(text: str, cfg: MapConfig) -> GroundTruthMap:
-    _, _, seed_text = text.partition(":")
+    kind, _, seed_text = text.partition(":")
     try:
         seed = int(seed_text) if seed_text else 0
         if seed < 0:
             raise ValueError
     except ValueError:
-        raise MrExploreError(f"bad generator spec {text!r}; write generated:SEED with an integer SEED >= 0") from None
-    spec = FloorplanSpec(seed=seed)
+        raise MrExploreError(f"bad generator spec {text!r}; write {kind}:SEED with an integer SEED >= 0") from None
+    spec = FloorplanSpec.varied(seed) if kind == "varied" else FloorplanSpec(seed=seed)
     _check_cells(text, (math.ceil(spec.height_m), math.ceil(spec.width_m)), 1.0, cfg)
     obstacle = generate_floorplan(spec, cfg.resolution_m)
     frame = GridFrame(obstacle.shape[0], obstacle.shape[1], cfg.resolution_m)
-    return _finish(obstacle, frame, f"generated:{seed}", None, cfg)
+    return _finish(obstacle, frame, f"{kind}:{seed}", None, cfg)
 
 
 def _read_yaml(path: Path) -> dict[str, Any]:

@@ -69,7 +69,9 @@ def test_validation_maps_are_held_out(tmp_path: Path) -> None:
     train_maps, val = split_maps(tmp_path, 6)
     assert len(train_maps) == 37 and not set(train_maps) & set(val)
     assert val[:3] == [str(folder / f"train_{i:03d}.png") for i in (37, 38, 39)]
-    assert val[3:] == ["generated:1000000", "generated:1000001", "generated:1000002"]
+    assert val[3:] == ["varied:1000000", "varied:1000001", "varied:1000002"]
+    fixed = split_maps(tmp_path, 6, "generated")[1][3:]
+    assert fixed == ["generated:1000000", "generated:1000001", "generated:1000002"]
 
 
 def test_training_episodes_take_the_run_settings_and_keep_faults_inside_the_team() -> None:

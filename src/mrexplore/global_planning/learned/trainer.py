@@ -75,16 +75,16 @@ _BATCH = 64
 
 
 # -- maps -------------------------------------------------------------------------------------------------
-def split_maps(train_dir: Path | None, val_maps: int) -> tuple[list[str], list[str]]:
+def split_maps(train_dir: Path | None, val_maps: int, plans: str = "varied") -> tuple[list[str], list[str]]:
     """Training and validation map specs: training DungeonMaps (the last ones by name held out) and
-    procedural floor plans (``generated:SEED``; validation seeds from 1,000,000). Half the validation maps
-    are DungeonMaps where the folder exists."""
+    procedural floor plans (``PLANS:SEED``, ``plans`` being ``varied`` or ``generated``; validation seeds
+    from 1,000,000). Half the validation maps are DungeonMaps where the folder exists."""
     dungeons: list[str] = []
     if train_dir is not None and train_dir.is_dir():
         dungeons = sorted(str(p) for p in train_dir.rglob("*.png"))
     n_dungeon_val = min(len(dungeons) // 10, val_maps // 2) if dungeons else 0
     val = dungeons[len(dungeons) - n_dungeon_val :] if n_dungeon_val else []
-    val += [f"generated:{_VAL_SEED0 + i}" for i in range(val_maps - len(val))]
+    val += [f"{plans}:{_VAL_SEED0 + i}" for i in range(val_maps - len(val))]
     return dungeons[: len(dungeons) - n_dungeon_val], val
 
 
@@ -676,7 +676,7 @@ def _episode_jobs(
     jobs: list[_Job] = []
     for _ in range(n):
         if not maps or rng.random() < cfg.generated_share:
-            spec = f"generated:{int(rng.integers(0, _VAL_SEED0))}"
+            spec = f"{cfg.plans}:{int(rng.integers(0, _VAL_SEED0))}"
         else:
             spec = maps[int(rng.integers(len(maps)))]
         robots = int(rng.integers(cfg.robots_min, cfg.robots_max + 1))
@@ -733,7 +733,7 @@ def train(
         rng.bit_generator.state = blob["rng"]
         done = f"{st.episodes} episodes, {st.elapsed_s / 60:.1f} min so far"
         say(f"resuming {out} at stage {st.stage} of {len(_stages(cfg))} ({done})")
-    train_maps, val_maps = split_maps(train_dir, cfg.val_maps)
+    train_maps, val_maps = split_maps(train_dir, cfg.val_maps, cfg.plans)
     if not train_maps:
         say("no training DungeonMaps found; training on procedural floor plans only")
     log = _Log(out, st.log_rows if resume and st.log_rows >= 0 else None)
@@ -886,7 +886,7 @@ def validate_policy(
         weights = _weights(both)
     elif policy is not None:
         weights = _weights(load_policy(policy).net)
-    _, val_maps = split_maps(train_dir, cfg.val_maps)
+    _, val_maps = split_maps(train_dir, cfg.val_maps, cfg.plans)
     with _Runner(workers, None) as runner:
         jobs = [_Job("eval", m, 3, i, weights, cfg) for i, m in enumerate(val_maps)]
         res = {r["map"]: r for r in runner.run(jobs, math.inf)}  # they come as they finish
