@@ -1,6 +1,7 @@
 """Layout statistics of map sets: how the procedural training plans compare with the dev HouseExpo plans.
 
-Run: python perf/plan_stats.py [--plans 200] [--resolution 0.1] [--sets houseexpo generated varied]
+Run: python perf/plan_stats.py [--plans 200] [--resolution 0.1] [--sets houseexpo generated varied] [--png PATH]
+(--png: also draw the first 18 plans of the last procedural set named.)
 For each set it prints the 10th / 50th / 90th percentiles over its maps of:
 - ``box m2``: the bounding box of the explorable free space, m²;
 - ``free m2``: the explorable free area (reachable from the start), m²;
@@ -29,6 +30,7 @@ from mrexplore.config import MapConfig
 from mrexplore.maps.ground_truth import explorable_region
 from mrexplore.maps.loaders import load_map
 from mrexplore.sim.starts import draw_starts
+from mrexplore.types import MrExploreError
 
 HOUSEEXPO = Path(__file__).resolve().parents[2] / "shared" / "maps" / "houseexpo"
 ROOM_CLEARANCE_M = 0.55
@@ -67,7 +69,10 @@ def main() -> int:
     ap.add_argument("--plans", type=int, default=200, help="procedural plans per set (seeds 0 .. plans - 1)")
     ap.add_argument("--resolution", type=float, default=0.1, help="cell size, metres (default 0.1)")
     ap.add_argument("--sets", nargs="+", default=list(SETS), choices=SETS)
+    ap.add_argument("--png", type=Path, default=None, help="draw the first 18 plans of the last procedural set")
     args = ap.parse_args()
+    if args.png is not None and not args.png.parent.is_dir():
+        raise MrExploreError(f"no folder {args.png.parent} for --png; create it or pick another path")
     print(f"percentiles 10 / 50 / 90 over each set's maps at {args.resolution} m")
     print(f"{'set':10s} {'maps':>5s}  " + "  ".join(f"{s:>18s}" for s in STATS))
     for name in args.sets:
@@ -85,7 +90,30 @@ def main() -> int:
             fmt = ".2f" if max(abs(p10), abs(p90)) < 10 else ".0f"
             cells.append(f"{p10:{fmt}} / {p50:{fmt}} / {p90:{fmt}}".rjust(18))
         print(f"{name:10s} {len(rows):5d}  " + "  ".join(cells))
+    drawn = [s for s in args.sets if s != "houseexpo"]
+    if args.png is not None and drawn:
+        draw(drawn[-1], args.resolution, args.png)
+        print(f"wrote {args.png}")
     return 0
+
+
+def draw(name: str, res: float, path: Path) -> None:
+    """The first 18 plans of a procedural set, free space white, in metres."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(3, 6, figsize=(15, 7.5))
+    for i, ax in enumerate(axes.ravel()):
+        truth = load_map(f"{name}:{i}", MapConfig(resolution_m=res))
+        h, w = truth.shape
+        ax.imshow(~truth.occupied, cmap="gray", origin="lower", extent=(0, w * res, 0, h * res))
+        ax.set_title(f"{name}:{i}", fontsize=9)
+        ax.tick_params(labelsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=60)
+    plt.close(fig)
 
 
 if __name__ == "__main__":

@@ -117,6 +117,9 @@ def test_a_file_named_like_the_generator_is_read_as_that_file(files, capsys) -> 
     assert m.name == "generated_house" and m.shape == (40, 40)
     assert main(["explore", "--map", "generated:-4"]) == 2
     assert _err(capsys) == "bad generator spec 'generated:-4'; write generated:SEED with an integer SEED >= 0"
+    assert main(["explore", "--map", "varied:x"]) == 2
+    assert _err(capsys) == "bad generator spec 'varied:x'; write varied:SEED with an integer SEED >= 0"
+    assert load_map("varied:3", MapConfig(resolution_m=0.1)).name == "varied:3"
 
 
 CLI_ERRORS = [

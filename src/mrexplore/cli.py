@@ -161,7 +161,7 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument(
         "--map",
         default=DEFAULT_MAP,
-        help=f"map file (.yaml, .png/.pgm, HouseExpo .json) or generated:SEED (default {DEFAULT_MAP})",
+        help=f"map file (.yaml, .png/.pgm, HouseExpo .json), generated:SEED or varied:SEED (default {DEFAULT_MAP})",
     )
     ex.add_argument("--robots", type=_COUNT, default=None, help=f"team size (default {SimConfig.robots})")
     ex.add_argument(
