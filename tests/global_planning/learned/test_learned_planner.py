@@ -141,3 +141,9 @@ def test_shipped_ncm_policy_loads_by_default_and_explores(name: str) -> None:
     assert Path(s.policy["path"]).stat().st_size < 2_000_000
     m = run_mission(load_map("generated:3", MapConfig(resolution_m=0.1)), s, SimConfig(robots=2), seed=1).measures
     assert m.coverage >= 0.99 and m.done_reason == "no_frontiers"
+
+
+def test_a_learned_planner_runs_torch_on_one_thread() -> None:
+    torch.set_num_threads(2)
+    LearnedPlanner(MultiGraphNet(LearnedConfig()))
+    assert torch.get_num_threads() == 1

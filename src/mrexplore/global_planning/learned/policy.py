@@ -16,7 +16,6 @@ from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs
 from mrexplore.global_planning.learned.network import MultiGraphNet, collate
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
-from mrexplore.threads import thread_count
 
 __all__ = [
     "LearnedPlanner",
@@ -151,11 +150,13 @@ class LearnedPlanner:
     """Privileged scalars for the critic at the next decision (set by the trainer; the actor never reads them)."""
 
     def __post_init__(self) -> None:
-        # torch's intra-op threads follow the package's setting: benchmark workers run one mission per core
-        # (MREXPLORE_THREADS=1), and two workers with two threads each made a decision 9x slower (187 ms
-        # against 21) by oversubscribing the cores. The network's tensors are too small to gain from threads.
-        if torch.get_num_threads() > thread_count():
-            torch.set_num_threads(thread_count())
+        # torch runs on one intra-op thread in a process that holds a learned planner. The network's tensors
+        # are too small to gain from threads, and its OpenMP workers spin after every call, taking the cores
+        # from the distance-field threads of the same decision and from other processes: with two threads,
+        # two bench workers made a decision 9x slower (187 ms against 21), and inference at 8 robots x 60
+        # clusters took 7.7 ms median (69 p95) beside a training run against 3.2 (7.9) with one.
+        if torch.get_num_threads() != 1:
+            torch.set_num_threads(1)
 
     def affinity(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64], float]:
         """E_rc ``(R, C) float64`` (``-inf`` where unreachable), with the inputs and the critic's value.
