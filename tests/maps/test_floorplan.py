@@ -28,6 +28,10 @@ def test_same_seed_same_plan_other_seed_other_plan() -> None:
 def test_bad_spec_is_refused() -> None:
     with pytest.raises(MrExploreError, match="floor plan must be > 4 m a side, got 3.0 x 12.0"):
         FloorplanSpec(width_m=3.0)
+    with pytest.raises(MrExploreError, match=r"floor plan needs clutter_prob in \[0, 1\], got 1.5"):
+        FloorplanSpec(clutter_prob=1.5)
+    with pytest.raises(MrExploreError, match="floor plan needs corridor_m >= 0 and 0 < fill <= 1"):
+        FloorplanSpec(fill=0.0)
 
 
 def test_outline_drops_outer_rooms_until_the_fill_and_keeps_the_rest_connected() -> None:

@@ -58,6 +58,9 @@ class FloorplanSpec:
             raise MrExploreError("floor plan needs door_m < min_room_m <= max_room_m")
         if self.corridor_m < 0 or not 0 < self.fill <= 1:
             raise MrExploreError("floor plan needs corridor_m >= 0 and 0 < fill <= 1")
+        for name in ("extra_door_prob", "stop_prob", "corridor_door_prob", "wide_door_prob", "clutter_prob"):
+            if not 0 <= getattr(self, name) <= 1:
+                raise MrExploreError(f"floor plan needs {name} in [0, 1], got {getattr(self, name)}")
 
     @classmethod
     def varied(cls, seed: int) -> FloorplanSpec:
@@ -130,7 +133,11 @@ def _shared_edge(a: tuple[float, ...], b: tuple[float, ...], need: float) -> tup
     return None
 
 
-def _corridor(rng: np.random.Generator, spec: FloorplanSpec) -> tuple[float, float, float, float] | None:
+_Rect = tuple[float, float, float, float]
+"""x0, y0, x1, y1 in metres."""
+
+
+def _corridor(rng: np.random.Generator, spec: FloorplanSpec) -> _Rect | None:
     """The corridor's rectangle along the long side, rooms of at least min_room_m on both sides; or None."""
     if spec.corridor_m <= 0:
         return None
@@ -145,9 +152,6 @@ def _corridor(rng: np.random.Generator, spec: FloorplanSpec) -> tuple[float, flo
     return (s, 0.0, s + spec.corridor_m, spec.height_m)
 
 
-_Rect = tuple[float, float, float, float]
-
-
 def _beside(corridor: _Rect, spec: FloorplanSpec) -> list[_Rect]:
     """The two strips of the building on either side of the corridor."""
     x0, y0, x1, y1 = corridor
@@ -159,7 +163,7 @@ def _beside(corridor: _Rect, spec: FloorplanSpec) -> list[_Rect]:
 def _outline(
     rng: np.random.Generator,
     spec: FloorplanSpec,
-    rooms: list[tuple[float, float, float, float]],
+    rooms: list[_Rect],
     adjacent: list[tuple[int, int]],
     corridor_ix: int,
 ) -> list[bool]:
