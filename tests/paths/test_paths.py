@@ -19,6 +19,7 @@ from mrexplore.paths.distance_field import (
     distance_fields,
     distance_matrix,
     distances_at,
+    pairwise_distances,
 )
 
 
@@ -114,6 +115,19 @@ def test_distance_matrix_equals_fields_read_at_targets(seed: int) -> None:
     targets = cells[rng.integers(0, len(cells), 6)]
     expected = np.stack([distances_at(f, targets) for f in distance_fields(passable, sources)])
     np.testing.assert_array_equal(distance_matrix(passable, sources, targets), expected)
+
+
+@given(st.integers(0, 10**6))
+def test_pairwise_distances_equal_the_reference_both_ways(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    passable = rng.random((int(rng.integers(2, 20)), int(rng.integers(2, 20)))) < 0.7
+    passable[0, :] = False  # a box smaller than the grid
+    cells = np.argwhere(np.ones_like(passable))
+    points = cells[rng.integers(0, len(cells), int(rng.integers(0, 7)))]  # walls and repeats too
+    got = pairwise_distances(passable, points)
+    want = np.array([[reference_dijkstra(passable, tuple(a))[tuple(b)] for b in points] for a in points])
+    np.testing.assert_allclose(got, want.reshape(got.shape), rtol=1e-6)
+    np.testing.assert_array_equal(got, got.T)
 
 
 @settings(max_examples=80, deadline=None)

@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 
 from mrexplore.config import LocalPlanningConfig, PreprocessConfig
 from mrexplore.local_planning.routing import RouteProblem, reversal_search
-from mrexplore.paths.distance_field import FieldLike, distance_fields, distances_at
+from mrexplore.paths.distance_field import FieldLike, distances_at, pairwise_distances
 from mrexplore.preprocessing.clustering import cluster_frontiers
 from mrexplore.types import BoolGrid, GridRC
 
@@ -123,8 +123,7 @@ class LocalRouter:
         crop = passable[r0:r1, c0:c1]
 
         def searched() -> NDArray[np.float64]:
-            fields = distance_fields(crop, local, local)
-            return np.array([f.at(local) for f in fields], dtype=np.float64)
+            return pairwise_distances(crop, local)
 
         box = (int(r0), int(r1), int(c0), int(c1))
         key = ("between", box, _digest(np.ascontiguousarray(local)), _digest(np.packbits(crop, axis=1)))

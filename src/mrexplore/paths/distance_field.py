@@ -23,7 +23,16 @@ from mrexplore.paths.moves import DC, DR, move_cost
 from mrexplore.threads import map_threads
 from mrexplore.types import BoolGrid, GridRC
 
-__all__ = ["Field", "FieldLike", "distance_field", "distance_fields", "distance_matrix", "distances_at", "descend_path"]
+__all__ = [
+    "Field",
+    "FieldLike",
+    "distance_field",
+    "distance_fields",
+    "distance_matrix",
+    "pairwise_distances",
+    "distances_at",
+    "descend_path",
+]
 
 
 @dataclass(frozen=True)
@@ -214,12 +223,17 @@ class _Searches:
         if targets is None:
             self.targets, self.stop_early = _NO_TARGETS, False
         else:
-            self.targets = (targets // self.w + 1) * self.wp + targets % self.w + 1
+            self.targets = self.padded(targets)
             self.stop_early = True
         self._scratch = threading.local()
 
-    def __call__(self, r: int, c: int) -> NDArray[np.float32]:
-        """``(h, w) float32`` distances from cell ``(r, c)`` of the grid (a view without the padding)."""
+    def padded(self, flat: NDArray[np.int64]) -> NDArray[np.int64]:
+        """Flat indices of the grid as flat indices of the padded grid."""
+        return (flat // self.w + 1) * self.wp + flat % self.w + 1
+
+    def __call__(self, r: int, c: int, targets: NDArray[np.int64] | None = None) -> NDArray[np.float32]:
+        """``(h, w) float32`` distances from cell ``(r, c)`` of the grid (a view without the padding);
+        ``targets`` (padded flat indices, :meth:`padded`), where given, replace the grid's for this search."""
         scratch = getattr(self._scratch, "arrays", None)
         if scratch is None:
             scratch = (
@@ -229,7 +243,10 @@ class _Searches:
             )
             self._scratch.arrays = scratch
         s = (r + 1) * self.wp + c + 1
-        best = _two_queue_dijkstra(self.start, self.wp, s, self.targets, self.stop_early, *scratch)
+        if targets is None:
+            best = _two_queue_dijkstra(self.start, self.wp, s, self.targets, self.stop_early, *scratch)
+        else:
+            best = _two_queue_dijkstra(self.start, self.wp, s, targets, True, *scratch)
         return best.reshape((self.h + 2, self.wp))[1:-1, 1:-1]
 
 
@@ -318,6 +335,48 @@ def distance_fields(
         return Field(np.full((0, 0), np.inf, dtype=np.float32), 0, 0, shape)
 
     return map_threads(one, list(sources_rc))  # the kernel releases the GIL
+
+
+def pairwise_distances(passable: BoolGrid, points_rc: NDArray[np.integer]) -> NDArray[np.float64]:
+    """Geodesic distances between every pair of points, ``(m, m) float64`` in cells, symmetric, ``inf`` where
+    unreachable: the search from point i stops once it has reached points i+1 .. m-1 and gives row i's
+    later entries, so each pair is searched once and the later searches are short.
+
+    Examples
+    --------
+    >>> g = np.ones((3, 6), bool); g[0:2, 2] = False  # a wall from the top; no corner cutting round it
+    >>> pairwise_distances(g, np.array([[0, 0], [0, 5], [2, 2]])).round(3).tolist()
+    [[0.0, 7.243, 3.414], [7.243, 0.0, 3.828], [3.414, 3.828, 0.0]]
+    """
+    if passable.dtype != np.bool_:
+        passable = passable.astype(bool)
+    pts = np.asarray(points_rc, dtype=np.int64).reshape(-1, 2)
+    m = len(pts)
+    out = np.full((m, m), np.inf)
+    cropped = _crop(passable)
+    if cropped is None or m == 0:
+        return out
+    crop, r0, c0 = cropped
+    r, c = pts[:, 0] - r0, pts[:, 1] - c0
+    inside = (r >= 0) & (r < crop.shape[0]) & (c >= 0) & (c < crop.shape[1])
+    search = _Searches(crop)
+    flat = search.padded(np.where(inside, r * crop.shape[1] + c, 0))
+
+    def row(i: int) -> NDArray[np.float64]:
+        later = np.flatnonzero(inside[i + 1 :]) + i + 1
+        vals = np.full(m, np.inf)
+        if inside[i] and len(later):
+            f = search(int(r[i]), int(c[i]), flat[later])
+            vals[later] = f[r[later], c[later]]
+        return vals
+
+    for i, vals in enumerate(map_threads(row, list(range(m)))):  # the kernel releases the GIL
+        out[i, i + 1 :] = vals[i + 1 :]
+        out[i + 1 :, i] = vals[i + 1 :]
+    on = np.flatnonzero(inside)
+    on = on[crop[r[on], c[on]]]  # a point on a wall is reached by nothing, not even itself
+    out[on, on] = 0.0
+    return out
 
 
 def distance_matrix(
