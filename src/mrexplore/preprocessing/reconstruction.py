@@ -18,11 +18,9 @@ from numpy.typing import NDArray
 
 from mrexplore.boxes import Box, grown_slices
 from mrexplore.preprocessing.frontiers import close_unknown_holes
-from mrexplore.preprocessing.scanline_fill import mark_coded_cells, scanline_fill
+from mrexplore.preprocessing.scanline_fill import fenced_fill, mark_coded_cells, scanline_fill
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap, apply_delta
 from mrexplore.types import BoolGrid, CellState, GridRC, MrExploreError, StateGrid
-
-_NO_FENCE = np.zeros((0, 0), dtype=bool)
 
 __all__ = ["fill_free", "fill_paper", "reconstruct", "CentreMap", "free_iou"]
 
@@ -46,7 +44,7 @@ def fill_free(codes: NDArray[np.uint8], seeds: NDArray[np.int64]) -> BoolGrid:
     True
     """
     filled = np.zeros(codes.shape, dtype=bool)
-    scanline_fill(codes, np.asarray(seeds, dtype=np.int64), np.zeros((0, 0), dtype=bool), filled)
+    scanline_fill(codes, np.asarray(seeds, dtype=np.int64), filled)
     return filled | (codes != 0)
 
 
@@ -62,7 +60,7 @@ def fill_paper(boundary: BoolGrid, seed_rc: GridRC) -> BoolGrid:
     r, c = seed_rc
     if not boundary[r, c]:
         seeds = np.array([r * boundary.shape[1] + c], np.int64)
-        scanline_fill(np.zeros((1, 1), np.uint8), seeds, np.ascontiguousarray(boundary), filled)
+        fenced_fill(np.ascontiguousarray(boundary), seeds, filled)
     return filled | boundary
 
 
@@ -100,13 +98,13 @@ def _rebuild_into(
         sub = np.ascontiguousarray(codes[r0:r1, c0:c1])
         rows, cols = np.divmod(seeds, codes.shape[1])
         filled = np.zeros(sub.shape, dtype=bool)
-        scanline_fill(sub, (rows - r0) * sub.shape[1] + (cols - c0), _NO_FENCE, filled)
+        scanline_fill(sub, (rows - r0) * sub.shape[1] + (cols - c0), filled)
         if not _escaped(filled, box, codes.shape):
             free[r0:r1, c0:c1] |= filled
             mark_coded_cells(codes, cells, free, occupied)
             return
     filled = np.zeros(codes.shape, dtype=bool)
-    scanline_fill(codes, seeds, _NO_FENCE, filled)
+    scanline_fill(codes, seeds, filled)
     free |= filled
     mark_coded_cells(codes, cells, free, occupied)
 
