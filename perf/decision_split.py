@@ -1,0 +1,93 @@
+"""Where a centre decision's time goes, part by part, without a profiler's overhead: wall-clock timers
+wrapped around the decision's parts for the first steps of one mission.
+
+    python perf/decision_split.py                                   # utility, 8 robots, largest HouseExpo map
+    python perf/decision_split.py --strategy hier --robots 8 --steps 300
+
+Parts: the centre's rebuild of the robots' maps (``rebuild``, one call per robot) and closing, frontier
+detection, Mean-Shift, the robots' distance fields, the global assignment, layer 3 (``route``, one call
+per robot; for ``hier`` its sub-clustering, candidate distances and order search) and the paths read off
+the fields. Prints the decision's median and each part's milliseconds per decision. Parts nest (``route``
+holds the three after it), so they do not add up to the decision.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from bench_step_and_decision import largest_houseexpo
+
+import mrexplore.local_planning.router as router
+import mrexplore.preprocessing.reconstruction as reconstruction
+import mrexplore.strategies as strategies
+from mrexplore.cli import run_script
+from mrexplore.config import MapConfig, MissionConfig, SimConfig
+from mrexplore.maps.loaders import load_map
+from mrexplore.mission import Mission
+
+PARTS: tuple[tuple[Any, str, str], ...] = (
+    (reconstruction, "_rebuild_into", "rebuild (per robot)"),
+    (reconstruction, "close_unknown_holes", "closing"),
+    (strategies, "detect_frontiers", "frontiers"),
+    (strategies, "cluster_frontiers", "mean-shift"),
+    (strategies, "distance_fields", "distance fields"),
+    (strategies.ExplorationPipeline, "assign", "assignment"),
+    (strategies.ExplorationPipeline, "route", "route (per robot)"),
+    (router, "cluster_frontiers", "  sub-clustering"),
+    (router, "pairwise_distances", "  candidate distances"),
+    (router, "reversal_search", "  order search"),
+    (strategies, "descend_path", "paths"),
+)
+
+
+def timed(fn: Callable[..., Any], spent: list[float]) -> Callable[..., Any]:
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        t = time.perf_counter()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            spent.append(time.perf_counter() - t)
+
+    return wrapper
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--map", type=Path, default=None, help="default: the largest HouseExpo map")
+    ap.add_argument("--strategy", default="utility")
+    ap.add_argument("--robots", type=int, default=8)
+    ap.add_argument("--steps", type=int, default=300)
+    ap.add_argument("--resolution", type=float, default=0.05)
+    args = ap.parse_args()
+    spent: dict[str, list[float]] = {}
+    for owner, name, label in PARTS:
+        spent[label] = []
+        setattr(owner, name, timed(getattr(owner, name), spent[label]))
+    truth = load_map(args.map or largest_houseexpo(), MapConfig(resolution_m=args.resolution))
+    mission = Mission(
+        truth,
+        strategies.make_strategy(args.strategy),
+        SimConfig(robots=args.robots),
+        MissionConfig(args.steps, 10),
+        0,
+        progress=False,
+    )
+    while mission.advance():
+        mission.decide()
+    n = len(mission.plan_ms)
+    print(f"{truth.name}, {args.strategy}, {args.robots} robots, {args.steps} steps: {n} decisions")
+    print(f"decision median {np.median(mission.plan_ms):.2f} ms, mean {np.mean(mission.plan_ms):.2f} ms")
+    print(f"{'part':24s} {'calls':>6s} {'ms per decision':>16s}")
+    for label, times in spent.items():
+        if times:
+            print(f"{label:24s} {len(times):6d} {1e3 * sum(times) / max(n, 1):16.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(run_script(main))
