@@ -72,7 +72,7 @@ def main() -> int:
             t1 = time.perf_counter()
             message = decode(data)
             t2 = time.perf_counter()
-            rebuilt = reconstruct(message.code_grid(), message.seeds)
+            rebuilt = reconstruct(message.code_grid(), message.seeds, message.cells)
             t3 = time.perf_counter()
             for key, dt in zip(times, (t1 - t0, t2 - t1, t3 - t2), strict=True):
                 times[key].append(dt * 1e3)

@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import ndimage
 
-from mrexplore.preprocessing.frontiers import detect_frontiers
+from mrexplore.preprocessing.frontiers import close_unknown_holes, detect_frontiers
 from mrexplore.preprocessing.reconstruction import CentreMap, fill_free, fill_paper, free_iou, reconstruct
 from mrexplore.preprocessing.sparse_codec import decode, encode
 from mrexplore.preprocessing.sparse_map import (
@@ -133,6 +133,38 @@ def test_roundtrip_exact_on_random_maps(case: tuple[np.ndarray, tuple[int, int]]
     near = rim(state)
     assert np.array_equal(rebuilt == F, state == F)
     assert np.array_equal(rebuilt[near], state[near])
+
+
+@settings(max_examples=100, deadline=None)
+@given(random_maps(), random_maps(), st.integers(0, 20), st.integers(0, 20), st.sampled_from([1, 3, 5]))
+def test_centre_merges_and_closes_on_its_box_as_on_the_whole_grid(
+    a: tuple[np.ndarray, tuple[int, int]],
+    b: tuple[np.ndarray, tuple[int, int]],
+    dr: int,
+    dc: int,
+    closing: int,
+) -> None:
+    # Two robots' maps placed apart in a larger grid: the centre merges and closes on the box of their
+    # messages grown by the closing's reach; the reference merges and closes the whole grid.
+    shape = (40, 40)
+    grids, messages = [], []
+    for i, ((state, (r, c)), (r0, c0)) in enumerate(zip((a, b), ((3, 4), (3 + dr, 4 + dc)), strict=True)):
+        grid = np.full(shape, U, np.uint8)
+        grid[r0 : r0 + state.shape[0], c0 : c0 + state.shape[1]] = state
+        grids.append(grid)
+        messages.append(sparse_frontier_map(grid, i, 0, (r0 + r, c0 + c)))
+    centre = CentreMap(2, shape, closing_size_cells=closing)
+    for m in messages:
+        centre.receive(m)
+    rebuilt = [reconstruct(m.code_grid(), m.seeds) for m in messages]
+    free = (rebuilt[0] == F) | (rebuilt[1] == F)
+    occupied = (rebuilt[0] == O) | (rebuilt[1] == O)
+    whole = np.full(shape, U, np.uint8)
+    whole[occupied] = O
+    whole[free & ~occupied] = F
+    assert np.array_equal(centre.state(), close_unknown_holes(whole, closing))
+    for m, r in zip(messages, rebuilt, strict=True):  # given the message's cells: the same grid
+        assert np.array_equal(reconstruct(m.code_grid(), m.seeds, m.cells), r)
 
 
 def test_fill_beyond_the_box_of_the_message_is_rebuilt() -> None:

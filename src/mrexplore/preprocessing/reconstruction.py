@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrexplore.boxes import Box, grown_slices
-from mrexplore.preprocessing.frontiers import close_unknown_holes
+from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
 from mrexplore.preprocessing.scanline_fill import fenced_fill, mark_coded_cells, scanline_fill
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap, apply_delta
 from mrexplore.types import BoolGrid, CellState, GridRC, MrExploreError, StateGrid
@@ -89,24 +89,47 @@ def _escaped(filled: BoolGrid, box: Box, shape: tuple[int, int]) -> bool:
 
 def _rebuild_into(
     codes: NDArray[np.uint8], cells: NDArray[np.int64], seeds: NDArray[np.int64], free: BoolGrid, occupied: BoolGrid
-) -> None:
+) -> Box | None:
+    """One robot's fill and coded cells into ``free`` and ``occupied``; returns the box every cell it set
+    lies in (the whole grid where free space reached the side of the message's box), None when the
+    message is empty."""
     seeds = np.asarray(seeds, dtype=np.int64)
     box = _fill_box(codes, cells, seeds)
-    if box is not None:
-        # On a large map a robot's free space is a small part of it: fill that box only.
-        r0, r1, c0, c1 = box
-        sub = np.ascontiguousarray(codes[r0:r1, c0:c1])
-        rows, cols = np.divmod(seeds, codes.shape[1])
-        filled = np.zeros(sub.shape, dtype=bool)
-        scanline_fill(sub, (rows - r0) * sub.shape[1] + (cols - c0), filled)
-        if not _escaped(filled, box, codes.shape):
-            free[r0:r1, c0:c1] |= filled
-            mark_coded_cells(codes, cells, free, occupied)
-            return
+    if box is None:
+        return None
+    # On a large map a robot's free space is a small part of it: fill that box only.
+    r0, r1, c0, c1 = box
+    sub = np.ascontiguousarray(codes[r0:r1, c0:c1])
+    rows, cols = np.divmod(seeds, codes.shape[1])
+    filled = np.zeros(sub.shape, dtype=bool)
+    scanline_fill(sub, (rows - r0) * sub.shape[1] + (cols - c0), filled)
+    if not _escaped(filled, box, codes.shape):
+        free[r0:r1, c0:c1] |= filled
+        mark_coded_cells(codes, cells, free, occupied)  # coded cells and their neighbours: inside the box
+        return box
     filled = np.zeros(codes.shape, dtype=bool)
     scanline_fill(codes, seeds, filled)
     free |= filled
     mark_coded_cells(codes, cells, free, occupied)
+    return 0, codes.shape[0], 0, codes.shape[1]
+
+
+def _union(a: Box | None, b: Box | None) -> Box | None:
+    if a is None or b is None:
+        return b if a is None else a
+    return min(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), max(a[3], b[3])
+
+
+def _merged_state(free: BoolGrid, occupied: BoolGrid, box: Box | None, closing_size_cells: int) -> StateGrid:
+    """The grid of ``free`` and ``occupied`` (nothing set outside ``box``), closed: state and closing are
+    computed on ``box`` grown by the closing's reach only, which closes exactly as the whole grid does
+    (:func:`~mrexplore.preprocessing.frontiers.closing_reach`); every cell beyond is unknown."""
+    state = np.full(free.shape, CellState.UNKNOWN, dtype=np.uint8)
+    if box is None:
+        return state
+    rows, cols = grown_slices(box, closing_reach(closing_size_cells), free.shape)
+    state[rows, cols] = close_unknown_holes(_state_of(free[rows, cols], occupied[rows, cols]), closing_size_cells)
+    return state
 
 
 def _state_of(free: BoolGrid, occupied: BoolGrid) -> StateGrid:
@@ -116,13 +139,22 @@ def _state_of(free: BoolGrid, occupied: BoolGrid) -> StateGrid:
     return state
 
 
-def reconstruct(codes: NDArray[np.uint8], seeds: NDArray[np.int64]) -> StateGrid:
+def reconstruct(
+    codes: NDArray[np.uint8], seeds: NDArray[np.int64], cells: NDArray[np.int64] | None = None
+) -> StateGrid:
     """``(H, W) uint8`` one robot's grid: filled free space, the coded neighbours as unknown or occupied,
-    the rest unknown."""
+    the rest unknown. ``cells``: the coded cells' row-major indices where the caller has them (a message's
+    ``cells``); None: found in ``codes`` (a pass over the whole grid)."""
     free = np.zeros(codes.shape, dtype=bool)
     occupied = np.zeros(codes.shape, dtype=bool)
-    _rebuild_into(codes, np.flatnonzero(codes.ravel()).astype(np.int64), seeds, free, occupied)
-    return _state_of(free, occupied)
+    if cells is None:
+        cells = np.flatnonzero(codes.ravel()).astype(np.int64)
+    box = _rebuild_into(codes, np.asarray(cells, dtype=np.int64), seeds, free, occupied)
+    state = np.full(codes.shape, CellState.UNKNOWN, dtype=np.uint8)
+    if box is not None:
+        r0, r1, c0, c1 = box
+        state[r0:r1, c0:c1] = _state_of(free[r0:r1, c0:c1], occupied[r0:r1, c0:c1])
+    return state
 
 
 class CentreMap:
@@ -186,10 +218,11 @@ class CentreMap:
         closing after reconstruction)."""
         free = np.zeros(self.shape, dtype=bool)
         occupied = np.zeros(self.shape, dtype=bool)
+        box: Box | None = None
         for i in range(len(self._codes)):
             if self._known[i]:  # each robot's fill in one shared pair of masks, touching only its cells
-                _rebuild_into(self._codes[i], self._cells[i], self._seeds[i], free, occupied)
-        return close_unknown_holes(_state_of(free, occupied), self.closing_size_cells)
+                box = _union(box, _rebuild_into(self._codes[i], self._cells[i], self._seeds[i], free, occupied))
+        return _merged_state(free, occupied, box, self.closing_size_cells)
 
 
 def free_iou(a: BoolGrid, b: BoolGrid) -> float:
