@@ -22,8 +22,9 @@ def scanline_fill(codes: np.ndarray, seeds: np.ndarray, filled: np.ndarray) -> N
     """Scan-line flood fill into ``filled`` from ``seeds`` (row-major indices): a move out of a cell is allowed
     towards every side its neighbour code does not flag.
 
-    The stack is a typed list of cells: an array stack that grows by reallocation (an array variable
-    reassigned in the loop) ran 8x slower on the same fills, its inner loops no longer optimised."""
+    The stack is a typed list of cells: an array stack that grew by reallocation (an array variable
+    reassigned in the loop) ran 8x slower on the same fills, apparently because numba then left the inner
+    loops unoptimised."""
     H, W = filled.shape
     stack = [(0, 0) for _ in range(0)]  # an empty typed list of cells
     for s in seeds:
