@@ -104,13 +104,19 @@ def test_astar_is_optimal_and_valid(passable: np.ndarray, data: st.DataObject) -
     assert path_length_cells(path) == pytest.approx(ref)
 
 
+def walled_grid(rng: np.random.Generator, max_side: int) -> tuple[np.ndarray, np.ndarray]:
+    """A random grid, 70% passable, its top row blocked (the passable box is smaller than the grid), and
+    all its cells."""
+    passable = rng.random((int(rng.integers(2, max_side)), int(rng.integers(2, max_side)))) < 0.7
+    passable[0, :] = False
+    return passable, np.argwhere(np.ones_like(passable))
+
+
 @settings(max_examples=50, deadline=None)
 @given(st.integers(0, 10**6))
 def test_distance_matrix_equals_fields_read_at_targets(seed: int) -> None:
     rng = np.random.default_rng(seed)
-    passable = rng.random((int(rng.integers(2, 25)), int(rng.integers(2, 25)))) < 0.7
-    passable[0, :] = False  # a box smaller than the grid
-    cells = np.argwhere(np.ones_like(passable))
+    passable, cells = walled_grid(rng, 25)
     sources = cells[rng.integers(0, len(cells), 4)]
     targets = cells[rng.integers(0, len(cells), 6)]
     expected = np.stack([distances_at(f, targets) for f in distance_fields(passable, sources)])
@@ -120,9 +126,7 @@ def test_distance_matrix_equals_fields_read_at_targets(seed: int) -> None:
 @given(st.integers(0, 10**6))
 def test_pairwise_distances_equal_the_reference_both_ways(seed: int) -> None:
     rng = np.random.default_rng(seed)
-    passable = rng.random((int(rng.integers(2, 20)), int(rng.integers(2, 20)))) < 0.7
-    passable[0, :] = False  # a box smaller than the grid
-    cells = np.argwhere(np.ones_like(passable))
+    passable, cells = walled_grid(rng, 20)
     points = cells[rng.integers(0, len(cells), int(rng.integers(0, 7)))]  # walls and repeats too
     got = pairwise_distances(passable, points)
     want = np.array([[reference_dijkstra(passable, tuple(a))[tuple(b)] for b in points] for a in points])

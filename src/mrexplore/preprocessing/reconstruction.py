@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from mrexplore.boxes import Box, grown_slices
 from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
-from mrexplore.preprocessing.scanline_fill import fenced_fill, mark_coded_cells, scanline_fill
+from mrexplore.preprocessing.scanline_fill import mark_coded_cells, scanline_fill
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap, apply_delta
 from mrexplore.types import BoolGrid, CellState, GridRC, MrExploreError, StateGrid
 
@@ -60,8 +60,19 @@ def fill_paper(boundary: BoolGrid, seed_rc: GridRC) -> BoolGrid:
     r, c = seed_rc
     if not boundary[r, c]:
         seeds = np.array([r * boundary.shape[1] + c], np.int64)
-        fenced_fill(np.ascontiguousarray(boundary), seeds, filled)
+        scanline_fill(_fence_codes(boundary), seeds, filled)
     return filled | boundary
+
+
+def _fence_codes(fence: BoolGrid) -> NDArray[np.uint8]:
+    """The paper's rule as neighbour codes for :func:`scanline_fill`: a move between two cells is blocked
+    where either lies on the fence (bits 0-3: up, down, left, right)."""
+    codes = np.where(fence, np.uint8(0x0F), np.uint8(0))
+    codes[1:] |= fence[:-1].astype(np.uint8)  # the cell above is on the fence
+    codes[:-1] |= fence[1:].astype(np.uint8) << 1
+    codes[:, 1:] |= fence[:, :-1].astype(np.uint8) << 2
+    codes[:, :-1] |= fence[:, 1:].astype(np.uint8) << 3
+    return codes
 
 
 def _fill_box(codes: NDArray[np.uint8], cells: NDArray[np.int64], seeds: NDArray[np.int64]) -> Box | None:

@@ -1,4 +1,4 @@
-"""Scan-line flood fill of free space, steered by neighbour codes or fenced by a mask (numba kernels).
+"""Scan-line flood fill of free space, steered by neighbour codes (numba kernels).
 
 Shared by the robot (choosing the seeds its message needs) and the centre (rebuilding free space).
 """
@@ -8,7 +8,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-__all__ = ["scanline_fill", "fenced_fill", "pick_seeds", "neighbour_codes_kernel", "mark_coded_cells"]
+__all__ = ["scanline_fill", "pick_seeds", "neighbour_codes_kernel", "mark_coded_cells"]
 
 _FREE, _OCCUPIED, _UNKNOWN = 0, 1, 2  # CellState values
 _DR = (-1, 1, 0, 0)
@@ -50,38 +50,6 @@ def scanline_fill(codes: np.ndarray, seeds: np.ndarray, filled: np.ndarray) -> N
             for x in range(lo, hi + 1):
                 ok = (codes[r, x] & mask) == 0 and not filled[rr, x]
                 if ok and not in_run:  # one seed per run of open cells in the next row
-                    stack.append((rr, x))
-                in_run = ok
-
-
-@nb.njit(cache=True, nogil=True)
-def fenced_fill(fence: np.ndarray, seeds: np.ndarray, filled: np.ndarray) -> None:  # pragma: no cover - numba
-    """Scan-line flood fill into ``filled`` fenced by a mask (the paper's rule): a move may leave only a cell
-    off the fence and enter only one off it; fence cells are the caller's to add afterwards."""
-    H, W = filled.shape
-    stack = [(0, 0) for _ in range(0)]  # an empty typed list of cells
-    for s in seeds:
-        stack.append((s // W, s % W))
-    while len(stack):
-        r, c = stack.pop()
-        if filled[r, c]:
-            continue
-        lo = c
-        while lo > 0 and not filled[r, lo - 1] and not fence[r, lo] and not fence[r, lo - 1]:
-            lo -= 1
-        hi = c
-        while hi < W - 1 and not filled[r, hi + 1] and not fence[r, hi] and not fence[r, hi + 1]:
-            hi += 1
-        for x in range(lo, hi + 1):
-            filled[r, x] = True
-        for k in range(2):
-            rr = r - 1 if k == 0 else r + 1
-            if rr < 0 or rr >= H:
-                continue
-            in_run = False
-            for x in range(lo, hi + 1):
-                ok = not fence[r, x] and not fence[rr, x] and not filled[rr, x]
-                if ok and not in_run:
                     stack.append((rr, x))
                 in_run = ok
 
