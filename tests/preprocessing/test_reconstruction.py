@@ -147,11 +147,10 @@ def test_centre_merges_and_closes_on_its_box_as_on_the_whole_grid(
     # Two robots' maps placed apart in a larger grid: the centre merges and closes on the box of their
     # messages grown by the closing's reach; the reference merges and closes the whole grid.
     shape = (40, 40)
-    grids, messages = [], []
+    messages = []
     for i, ((state, (r, c)), (r0, c0)) in enumerate(zip((a, b), ((3, 4), (3 + dr, 4 + dc)), strict=True)):
         grid = np.full(shape, U, np.uint8)
         grid[r0 : r0 + state.shape[0], c0 : c0 + state.shape[1]] = state
-        grids.append(grid)
         messages.append(sparse_frontier_map(grid, i, 0, (r0 + r, c0 + c)))
     centre = CentreMap(2, shape, closing_size_cells=closing)
     for m in messages:
