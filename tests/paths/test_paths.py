@@ -134,6 +134,19 @@ def test_pairwise_distances_equal_the_reference_both_ways(seed: int) -> None:
     np.testing.assert_array_equal(got, got.T)
 
 
+@settings(max_examples=50, deadline=None)
+@given(st.integers(0, 10**6))
+def test_pairwise_searches_sharing_one_array_equal_fresh_fields_bit_for_bit(seed: int) -> None:
+    # Every search after the first starts from the array the one before restored from its queues.
+    rng = np.random.default_rng(seed)
+    passable, cells = walled_grid(rng, 30)
+    points = cells[rng.integers(0, len(cells), 12)]
+    fresh = np.stack([distances_at(f, points) for f in distance_fields(passable, points)])
+    got = pairwise_distances(passable, points)
+    upper = np.triu_indices(len(points), 1)
+    np.testing.assert_array_equal(got[upper], fresh[upper])  # i's search read at j (float32 sums by direction)
+
+
 @settings(max_examples=80, deadline=None)
 @given(st.integers(0, 10**6))
 def test_fields_stopped_at_their_targets_are_exact_up_to_them(seed: int) -> None:

@@ -117,8 +117,8 @@ def _start_values(passable: np.ndarray) -> np.ndarray:  # pragma: no cover - num
 
 
 @nb.njit(cache=True, nogil=True)
-def _two_queue_dijkstra(
-    start: np.ndarray,
+def _search_into(
+    best: np.ndarray,
     Wp: int,
     s: int,
     targets: np.ndarray,
@@ -126,21 +126,18 @@ def _two_queue_dijkstra(
     q_node: np.ndarray,
     q_key: np.ndarray,
     is_target: np.ndarray,
-) -> np.ndarray:  # pragma: no cover - numba
-    """Distances from padded cell ``s`` over the padded flat grid ``start`` (:func:`_start_values`, row
-    length ``Wp``); ``inf`` where unreachable or blocked.
+) -> tuple[int, int]:  # pragma: no cover - numba
+    """The search from passable padded cell ``s``, in place on ``best`` (a copy of the start values,
+    :func:`_start_values`, row length ``Wp``): finite distances where settled; blocked cells keep
+    ``_BLOCKED``. Returns the two queues' lengths: ``q_node[0, :t0]`` and ``q_node[1, :t1]`` hold every cell
+    the search changed except ``s`` itself, so a caller can restore ``best`` without a pass over the grid.
 
     ``q_node``, ``q_key`` (``(2, passable cells + 1)``) and ``is_target`` (all False, one per padded cell)
     are the caller's scratch, reused from search to search: allocating them afresh per search cost more
     in page faults than the search itself on a large floor. ``is_target`` is left all False again.
     """
-    n = start.shape[0]
     inf = np.float32(np.inf)
     zero = np.float32(0.0)
-    best = start.copy()
-    if best[s] < zero:
-        best[:] = inf
-        return best
     # Targets (padded flat indices): with stop_early, the search ends once every passable one is settled.
     remaining = 0
     if stop_early:
@@ -202,10 +199,63 @@ def _two_queue_dijkstra(
     if stop_early:
         for v in targets:
             is_target[v] = False  # targets never settled (unreachable) stay marked otherwise
-    for i in range(n):
-        if best[i] < zero:
+    return t0, t1
+
+
+@nb.njit(cache=True, nogil=True)
+def _two_queue_dijkstra(
+    start: np.ndarray,
+    Wp: int,
+    s: int,
+    targets: np.ndarray,
+    stop_early: bool,
+    q_node: np.ndarray,
+    q_key: np.ndarray,
+    is_target: np.ndarray,
+) -> np.ndarray:  # pragma: no cover - numba
+    """Distances from padded cell ``s`` over the padded flat grid ``start`` (:func:`_start_values`, row
+    length ``Wp``); ``inf`` where unreachable or blocked. Scratch as :func:`_search_into`."""
+    inf = np.float32(np.inf)
+    best = start.copy()
+    if best[s] < np.float32(0.0):
+        best[:] = inf
+        return best
+    _search_into(best, Wp, s, targets, stop_early, q_node, q_key, is_target)
+    for i in range(best.shape[0]):
+        if best[i] < np.float32(0.0):
             best[i] = inf
     return best
+
+
+@nb.njit(cache=True, nogil=True)
+def _pairwise_kernel(
+    start: np.ndarray, Wp: int, points: np.ndarray, q_node: np.ndarray, q_key: np.ndarray, is_target: np.ndarray
+) -> np.ndarray:  # pragma: no cover - numba
+    """``(m, m) float64``: row i holds the distances from padded cell ``points[i]`` to the later points
+    (``inf`` elsewhere), each search stopped once it has reached them. One array serves every search and is
+    restored from the queues after each (:func:`_search_into`): a copy of the grid and a pass over it per
+    search, and a thread hand-off per row, cost more than the short searches between a cluster's
+    candidates."""
+    m = points.shape[0]
+    out = np.full((m, m), np.inf)
+    best = start.copy()
+    zero = np.float32(0.0)
+    for i in range(m - 1):
+        s = points[i]
+        if start[s] < zero:
+            continue
+        later = points[i + 1 :]
+        t0, t1 = _search_into(best, Wp, s, later, True, q_node, q_key, is_target)
+        for j in range(i + 1, m):
+            d = best[points[j]]
+            if d >= zero:  # blocked targets keep _BLOCKED
+                out[i, j] = d
+        best[s] = start[s]
+        for j in range(t0):
+            best[q_node[0, j]] = start[q_node[0, j]]
+        for j in range(t1):
+            best[q_node[1, j]] = start[q_node[1, j]]
+    return out
 
 
 _NO_TARGETS = np.zeros(0, dtype=np.int64)
@@ -227,6 +277,18 @@ class _Searches:
             self.stop_early = True
         self._scratch = threading.local()
 
+    def scratch(self) -> tuple[NDArray[np.int32], NDArray[np.float32], NDArray[np.bool_]]:
+        """This thread's queues and target marks (:func:`_search_into`), allocated on first use."""
+        arrays = getattr(self._scratch, "arrays", None)
+        if arrays is None:
+            arrays = (
+                np.empty((2, self.cap), dtype=np.int32),
+                np.empty((2, self.cap), dtype=np.float32),
+                np.zeros(self.start.shape[0], dtype=np.bool_),
+            )
+            self._scratch.arrays = arrays
+        return arrays
+
     def padded(self, flat: NDArray[np.int64]) -> NDArray[np.int64]:
         """Flat indices of the grid as flat indices of the padded grid."""
         return (flat // self.w + 1) * self.wp + flat % self.w + 1
@@ -234,14 +296,7 @@ class _Searches:
     def __call__(self, r: int, c: int, targets: NDArray[np.int64] | None = None) -> NDArray[np.float32]:
         """``(h, w) float32`` distances from cell ``(r, c)`` of the grid (a view without the padding);
         ``targets`` (padded flat indices, :meth:`padded`), where given, replace the grid's for this search."""
-        scratch = getattr(self._scratch, "arrays", None)
-        if scratch is None:
-            scratch = (
-                np.empty((2, self.cap), dtype=np.int32),
-                np.empty((2, self.cap), dtype=np.float32),
-                np.zeros(self.start.shape[0], dtype=np.bool_),
-            )
-            self._scratch.arrays = scratch
+        scratch = self.scratch()
         s = (r + 1) * self.wp + c + 1
         if targets is None:
             best = _two_queue_dijkstra(self.start, self.wp, s, self.targets, self.stop_early, *scratch)
@@ -360,20 +415,12 @@ def pairwise_distances(passable: BoolGrid, points_rc: NDArray[np.integer]) -> ND
     r, c = pts[:, 0] - r0, pts[:, 1] - c0
     inside = (r >= 0) & (r < crop.shape[0]) & (c >= 0) & (c < crop.shape[1])
     search = _Searches(crop)
-    flat = search.padded(np.where(inside, r * crop.shape[1] + c, 0))
-
-    def row(i: int) -> NDArray[np.float64]:
-        later = np.flatnonzero(inside[i + 1 :]) + i + 1
-        vals = np.full(m, np.inf)
-        if inside[i] and len(later):
-            f = search(int(r[i]), int(c[i]), flat[later])
-            vals[later] = f[r[later], c[later]]
-        return vals
-
-    for i, vals in enumerate(map_threads(row, list(range(m)))):  # the kernel releases the GIL
-        out[i, i + 1 :] = vals[i + 1 :]
-        out[i + 1 :, i] = vals[i + 1 :]
     on = np.flatnonzero(inside)
+    q_node, q_key, is_target = search.scratch()
+    upper = _pairwise_kernel(
+        search.start, search.wp, search.padded(r[on] * crop.shape[1] + c[on]), q_node, q_key, is_target
+    )
+    out[np.ix_(on, on)] = np.minimum(upper, upper.T)
     on = on[crop[r[on], c[on]]]  # a point on a wall is reached by nothing, not even itself
     out[on, on] = 0.0
     return out
