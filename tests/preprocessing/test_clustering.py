@@ -17,6 +17,7 @@ from mrexplore.preprocessing.clustering import (
     adaptive_bandwidth,
     bin_seeds,
     cluster_frontiers,
+    linear_percentile,
     mean_shift,
     split_for_team,
 )
@@ -48,6 +49,16 @@ def test_bandwidth_is_percentile_of_pairwise_distances() -> None:
     pts = np.array([[0.0, 0.0], [0.0, 3.0], [4.0, 0.0]])  # distances 3, 4, 5
     assert adaptive_bandwidth(pts, 50, 100) == 4.0
     assert adaptive_bandwidth(pts, 15, 100) == pytest.approx(3.3)
+
+
+@given(
+    st.lists(st.floats(0, 1e4, allow_nan=False), min_size=1, max_size=60),
+    st.one_of(st.integers(0, 100), st.floats(0, 100), st.sampled_from([15, 15.0, 50, 99.9])),
+)
+def test_linear_percentile_is_numpys_bit_for_bit(values: list[float], percentile: float) -> None:
+    a = np.array(values)
+    assert linear_percentile(a, percentile) == float(np.percentile(a, percentile))
+    assert linear_percentile(np.round(a), percentile) == float(np.percentile(np.round(a), percentile))  # ties
 
 
 @pytest.mark.filterwarnings("ignore:Binning data failed")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numba as nb
@@ -12,7 +13,14 @@ from scipy.spatial.distance import pdist
 
 from mrexplore.config import PreprocessConfig
 
-__all__ = ["Clusters", "adaptive_bandwidth", "cluster_frontiers", "mean_shift", "split_for_team"]
+__all__ = [
+    "Clusters",
+    "adaptive_bandwidth",
+    "cluster_frontiers",
+    "linear_percentile",
+    "mean_shift",
+    "split_for_team",
+]
 
 
 @dataclass(frozen=True)
@@ -59,7 +67,30 @@ def adaptive_bandwidth(points: NDArray[np.floating], percentile: float, max_samp
     """
     if len(points) > max_sample:
         points = points[np.linspace(0, len(points) - 1, max_sample).astype(np.int64)]
-    return float(np.percentile(pdist(points), percentile))
+    return linear_percentile(pdist(points), percentile)
+
+
+def linear_percentile(values: NDArray[np.float64], percentile: float) -> float:
+    """``np.percentile(values, percentile)`` (linear method) of a non-empty 1-D array without NaNs, bit for
+    bit: the same virtual index and interpolation, on one partition. ``np.percentile``'s generality cost
+    more than the pairwise distances of a routed cluster (0.13 ms against 0.02).
+
+    Examples
+    --------
+    >>> linear_percentile(np.array([4.0, 1.0, 2.0, 3.0]), 15)
+    1.45
+    """
+    n = len(values)
+    virtual = (n - 1) * (percentile / 100)
+    if virtual >= n - 1:
+        return float(np.max(values))
+    lo = max(int(math.floor(virtual)), 0)
+    part = np.partition(values, [lo, lo + 1])
+    a, b = float(part[lo]), float(part[lo + 1])
+    gamma = virtual - lo
+    diff = b - a
+    # numpy's _lerp: from the nearer end, so the result stays within [a, b].
+    return b - diff * (1 - gamma) if gamma >= 0.5 else a + diff * gamma
 
 
 def cluster_frontiers(
