@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from mrexplore.boxes import mask_box
 from mrexplore.paths.moves import DC, DR, move_cost
-from mrexplore.threads import map_threads
+from mrexplore.threads import map_threads, thread_count
 from mrexplore.types import BoolGrid, GridRC
 
 __all__ = [
@@ -229,18 +229,26 @@ def _two_queue_dijkstra(
 
 @nb.njit(cache=True, nogil=True)
 def _pairwise_kernel(
-    start: np.ndarray, Wp: int, points: np.ndarray, q_node: np.ndarray, q_key: np.ndarray, is_target: np.ndarray
+    start: np.ndarray,
+    Wp: int,
+    points: np.ndarray,
+    rows: np.ndarray,
+    q_node: np.ndarray,
+    q_key: np.ndarray,
+    is_target: np.ndarray,
 ) -> np.ndarray:  # pragma: no cover - numba
-    """``(m, m) float64``: row i holds the distances from padded cell ``points[i]`` to the later points
-    (``inf`` elsewhere), each search stopped once it has reached them. One array serves every search and is
-    restored from the queues after each (:func:`_search_into`): a copy of the grid and a pass over it per
-    search, and a thread hand-off per row, cost more than the short searches between a cluster's
-    candidates."""
+    """``(m, m) float64``: each row i of ``rows`` holds the distances from padded cell ``points[i]`` to the
+    later points, each search stopped once it has reached them; ``inf`` elsewhere. One array serves every
+    search and is restored from the queues after each (:func:`_search_into`): a copy of the grid and a pass
+    over it per search, and a thread hand-off per row, cost more than the short searches between a
+    cluster's candidates."""
     m = points.shape[0]
     out = np.full((m, m), np.inf)
     best = start.copy()
     zero = np.float32(0.0)
-    for i in range(m - 1):
+    for i in rows:
+        if i >= m - 1:
+            continue
         s = points[i]
         if start[s] < zero:
             continue
@@ -392,6 +400,13 @@ def distance_fields(
     return map_threads(one, list(sources_rc))  # the kernel releases the GIL
 
 
+_PAIRWISE_SPLIT = 12
+"""Points from which :func:`pairwise_distances` shares its rows among the threads: 30 candidates in 12 m
+boxes of the largest HouseExpo map at 0.05 m took 6.6 ms on two threads against 11.9 on one, 12 took 2.2
+against 3.8 (``perf/bench_fields.py --pairwise 12``); the 7-9 candidates of a route in an 8-robot mission
+there took longer split (3.4 ms a decision against 2.8, ``perf/decision_split.py --strategy hier``)."""
+
+
 def pairwise_distances(passable: BoolGrid, points_rc: NDArray[np.integer]) -> NDArray[np.float64]:
     """Geodesic distances between every pair of points, ``(m, m) float64`` in cells, symmetric, ``inf`` where
     unreachable: the search from point i stops once it has reached points i+1 .. m-1 and gives row i's
@@ -416,10 +431,15 @@ def pairwise_distances(passable: BoolGrid, points_rc: NDArray[np.integer]) -> ND
     inside = (r >= 0) & (r < crop.shape[0]) & (c >= 0) & (c < crop.shape[1])
     search = _Searches(crop)
     on = np.flatnonzero(inside)
-    q_node, q_key, is_target = search.scratch()
-    upper = _pairwise_kernel(
-        search.start, search.wp, search.padded(r[on] * crop.shape[1] + c[on]), q_node, q_key, is_target
-    )
+    padded = search.padded(r[on] * crop.shape[1] + c[on])
+    # Rows in turns over the threads where a thread's hand-off pays (row i searches until it has reached
+    # the points after it, so the early rows are the long ones).
+    parts = thread_count() if len(on) >= _PAIRWISE_SPLIT else 1
+
+    def rows(first: int) -> NDArray[np.float64]:
+        return _pairwise_kernel(search.start, search.wp, padded, np.arange(first, len(on), parts), *search.scratch())
+
+    upper = np.minimum.reduce(map_threads(rows, list(range(parts))))
     out[np.ix_(on, on)] = np.minimum(upper, upper.T)
     on = on[crop[r[on], c[on]]]  # a point on a wall is reached by nothing, not even itself
     out[on, on] = 0.0
