@@ -161,11 +161,7 @@ def reconstruct(
     if cells is None:
         cells = np.flatnonzero(codes.ravel()).astype(np.int64)
     box = _rebuild_into(codes, np.asarray(cells, dtype=np.int64), seeds, free, occupied)
-    state = np.full(codes.shape, CellState.UNKNOWN, dtype=np.uint8)
-    if box is not None:
-        r0, r1, c0, c1 = box
-        state[r0:r1, c0:c1] = _state_of(free[r0:r1, c0:c1], occupied[r0:r1, c0:c1])
-    return state
+    return _merged_state(free, occupied, box, 1)  # a closing of 1 cell leaves the grid as it is
 
 
 class CentreMap:
