@@ -73,7 +73,7 @@ def adaptive_bandwidth(points: NDArray[np.floating], percentile: float, max_samp
 def linear_percentile(values: NDArray[np.float64], percentile: float) -> float:
     """``np.percentile(values, percentile)`` (linear method) of a non-empty 1-D array without NaNs, bit for
     bit: the same virtual index and interpolation, on one partition. ``np.percentile``'s generality cost
-    more than the pairwise distances of a routed cluster (0.13 ms against 0.02).
+    more than the pairwise distances of a routed cluster (``scipy.spatial.distance.pdist``) it reads.
 
     Examples
     --------
