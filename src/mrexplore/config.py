@@ -225,6 +225,10 @@ class PreprocessConfig(_Checked):
     split_for_team: bool = False
     """Where robots outnumber the Mean-Shift clusters, split the largest until there is one per robot
     (:func:`~mrexplore.preprocessing.clustering.split_for_team`); False: the paper's clusters, robots share."""
+    split_min_frontier_m: float = 12.0
+    """Under ``split_for_team``, a cluster is cut only while it holds this many metres of frontier (members
+    x cell size) or more, >= 0: at 12, each half keeps about a sensor range (6 m) of it; a shorter frontier
+    is seen whole by the one robot already going there."""
 
     def _validate(self) -> None:
         _require(
@@ -236,6 +240,12 @@ class PreprocessConfig(_Checked):
         _require(self.min_cluster_size >= 1, "min_cluster_size", ">= 1", self.min_cluster_size)
         _require(0 < self.bandwidth_percentile <= 100, "bandwidth_percentile", "in (0, 100]", self.bandwidth_percentile)
         _require(self.bandwidth_sample >= 2, "bandwidth_sample", ">= 2", self.bandwidth_sample)
+        _require(
+            math.isfinite(self.split_min_frontier_m) and self.split_min_frontier_m >= 0,
+            "split_min_frontier_m",
+            ">= 0 metres",
+            self.split_min_frontier_m,
+        )
 
 
 @dataclass(frozen=True)

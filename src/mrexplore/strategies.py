@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -241,7 +242,9 @@ class ExplorationPipeline:
         un_rc = _denoised_un(q.frontiers, q.blacklist, speck).astype(np.int32)
         clusters = cluster_frontiers(un_rc, self.preprocess)
         if self.preprocess.split_for_team:
-            clusters = split_for_team(clusters, len(q.robots_rc), self.preprocess.min_cluster_size)
+            pp = self.preprocess
+            shortest = math.ceil(round(pp.split_min_frontier_m / q.resolution_m, 6))  # metres to members
+            clusters = split_for_team(clusters, len(q.robots_rc), pp.min_cluster_size, shortest)
         return CandidateSet(clusters)
 
     def route(self, i: int, k: int, problem: AssignmentProblem, work: _Posed) -> NDArray[np.int32]:

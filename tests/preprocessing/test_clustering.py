@@ -155,3 +155,33 @@ def test_split_for_team_leaves_enough_clusters_and_small_ones_alone() -> None:
     assert split_for_team(one, 4, 2).sizes.tolist() == [3]  # 3 < 2 x 2 members: not split
     four = split_for_team(_one_cluster([(0, c) for c in range(8)]), 4, 2)
     assert four.sizes.tolist() == [2, 2, 2, 2] and four.centers_rc[:, 1].tolist() == [0, 2, 4, 6]
+
+
+def test_split_for_team_cuts_no_cluster_shorter_than_min_members() -> None:
+    line = _one_cluster([(0, c) for c in range(8)])
+    assert split_for_team(line, 4, 2, min_members=9).sizes.tolist() == [8]  # 8 members < 9: kept whole
+    # 8 >= 8: cut once; the halves' 4 members are under 8, so the cutting stops at 2 of the 4 clusters.
+    assert split_for_team(line, 4, 2, min_members=8).sizes.tolist() == [4, 4]
+
+
+@pytest.mark.parametrize(("resolution_m", "cut"), [(0.1, False), (2.0, True)])
+def test_a_pipeline_splits_for_its_team_only_frontiers_long_enough(resolution_m: float, cut: bool) -> None:
+    # A straight 30-cell frontier: Mean-Shift gives 5 clusters of 5-8 members, fewer than 7 robots. At
+    # 0.1 m a cluster holds under 1 m of frontier, under the 12 m floor: the paper's clusters stay. At
+    # 2 m the floor is 6 members: the largest clusters are cut until there is one per robot.
+    from mrexplore.preprocessing.frontiers import Frontiers
+    from mrexplore.strategies import CandidateQuery, make_strategy
+
+    un = np.zeros((5, 40), dtype=bool)
+    un[2, 5:35] = True
+    pp = PreprocessConfig(split_for_team=True, split_min_frontier_m=12.0)
+    robots = np.zeros((7, 2), np.int32)
+    frontiers = Frontiers(un, np.zeros_like(un))
+    q = CandidateQuery(np.zeros(un.shape, np.uint8), frontiers, None, robots, list, None, resolution_m)
+    paper = cluster_frontiers(frontiers.un_rc, pp)
+    assert sorted(paper.sizes.tolist()) == [5, 5, 6, 6, 8]
+    clusters = make_strategy("utility", preprocess_cfg=pp).candidates(q).clusters
+    if cut:
+        assert sorted(clusters.sizes.tolist()) == [3, 3, 4, 4, 5, 5, 6]  # 8 -> 4 + 4, 6 -> 3 + 3
+    else:
+        assert clusters.sizes.tolist() == paper.sizes.tolist()

@@ -307,14 +307,15 @@ def _nearest_member(members: NDArray[np.float64], mode: NDArray[np.float64]) -> 
     return [int(v) for v in members[int(np.argmin(d2))]]
 
 
-def split_for_team(clusters: Clusters, robots: int, min_cluster_size: int) -> Clusters:
+def split_for_team(clusters: Clusters, robots: int, min_cluster_size: int, min_members: int = 0) -> Clusters:
     """Clusters split until there is one per robot, where robots outnumber them.
 
     Mean-Shift's bandwidth (a percentile of pairwise distances) gives about as many clusters for 16
     robots as for 3; robots sharing a cluster then route through the same sub-clusters. Here the cluster
     with the most members is cut in two at the median of its members along their principal axis, each
     half's centre snapped to its member nearest the half's mean, until ``robots`` clusters exist or no
-    cluster has ``2 * min_cluster_size`` members. Unchanged when clusters suffice.
+    cluster has ``2 * min_cluster_size`` members nor ``min_members`` (a frontier too short to be worth
+    two robots). Unchanged when clusters suffice.
 
     Examples
     --------
@@ -332,7 +333,7 @@ def split_for_team(clusters: Clusters, robots: int, min_cluster_size: int) -> Cl
     while len(centers) < robots:
         sizes = np.bincount(labels, minlength=len(centers))
         k = int(np.argmax(sizes))  # the first of the largest: deterministic
-        if sizes[k] < 2 * min_cluster_size:
+        if sizes[k] < max(2 * min_cluster_size, min_members):
             break
         idx = np.flatnonzero(labels == k)
         pts = members[idx].astype(np.float64)
