@@ -1,0 +1,85 @@
+"""Compare learned policies run by separate benches on the same episodes (an ablation of the edge features).
+
+Each ``--runs LABEL=DIR`` names a folder a ``mrexplore bench --strategies hier --policy FILE`` wrote, all
+with the same maps, team sizes and seeds; each ``--train LABEL=DIR`` (optional) the ``mrexplore train``
+folder that made the policy, whose ``stages.csv`` gives the kept stage and its validation steps. The
+first label is the reference: the paired differences hold it against every other, episode by episode.
+
+    python perf/policy_ablation.py --runs all=runs/abl_bench/all no_advantage=runs/abl_bench/no_advantage \\
+        --train all=runs/abl/all no_advantage=runs/abl/no_advantage --out docs/results/train/ablation/report.md
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+from pathlib import Path
+
+from mrexplore.bench.report import paired_table, steps_table
+from mrexplore.bench.runner import read_rows
+
+
+def _pairs(items: list[str], flag: str) -> dict[str, Path]:
+    out: dict[str, Path] = {}
+    for item in items:
+        label, sep, path = item.partition("=")
+        if not sep or not label or not path:
+            raise SystemExit(f"{flag} {item!r}: give LABEL=DIR")
+        out[label] = Path(path)
+    return out
+
+
+def _kept(train_dir: Path) -> tuple[str, str, str]:
+    """The kept stage (fewest validation steps, the first of ties, as the trainer keeps it), its steps and
+    the untrained baseline's."""
+    with open(train_dir / "stages.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    best = min(rows, key=lambda r: float(r["val_steps_mean"]))
+    base = next(r for r in rows if r["stage"] == "baseline")
+    return best["stage"], f"{float(best['val_steps_mean']):.1f}", f"{float(base['val_steps_mean']):.1f}"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--runs", nargs="+", required=True, help="LABEL=BENCH_DIR, the reference first")
+    ap.add_argument("--train", nargs="*", default=[], help="LABEL=TRAIN_DIR (optional)")
+    ap.add_argument("--out", type=Path, default=None, help="write the markdown here (default: print it)")
+    args = ap.parse_args(argv)
+    runs, trains = _pairs(args.runs, "--runs"), _pairs(args.train, "--train")
+    rows = []
+    for label, folder in runs.items():
+        mine = [r for r in read_rows(folder / "results.csv") if r["strategy"] == "hier"]
+        if not mine:
+            raise SystemExit(f"{folder / 'results.csv'} holds no hier rows; bench with --strategies hier")
+        shas = {r["policy_sha256"] for r in mine}
+        if len(shas) != 1:
+            raise SystemExit(f"{folder} mixes {len(shas)} policies; give each policy its own bench folder")
+        unique = {(r["map_path"], r["robots"], r["seed"]): dict(r, strategy=label) for r in mine}
+        rows += unique.values()
+    labels = list(runs)
+    parts = ["# Policy ablation", f"Made by: `python perf/policy_ablation.py {' '.join(sys.argv[1:])}`"]
+    if trains:
+        lines = ["| policy | kept stage | validation steps | untrained | sha256 |", "| --- | --- | --- | --- | --- |"]
+        for label, folder in trains.items():
+            stage, steps, base = _kept(folder)
+            sha = next((r["policy_sha256"] for r in rows if r["strategy"] == label), "")[:12]
+            lines.append(f"| {label} | {stage} | {steps} | {base} | {sha} |")
+        parts += ["## Training (validation maps)", "\n".join(lines)]
+    parts += [
+        "## Steps by dataset (mean ± std)",
+        steps_table(rows, labels, key="dataset"),
+        f"## Paired: {labels[0]} against each other policy (fewer steps %, 95% bootstrap interval)",
+        paired_table(rows, labels[0], labels, key="dataset"),
+        "At equal coverage (steps to 99%):",
+        paired_table(rows, labels[0], labels, key="dataset", metric="steps_to_99"),
+    ]
+    text = "\n\n".join(parts) + "\n"
+    if args.out:
+        args.out.write_text(text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
