@@ -1,11 +1,13 @@
-"""Compare learned policies run by separate benches on the same episodes (an ablation of the edge features).
+"""Compare one strategy run by separate benches on the same episodes: policies (the edge-feature
+ablation) or settings (``--config``).
 
-Each ``--runs LABEL=DIR`` names a folder a ``mrexplore bench --strategies hier --policy FILE`` wrote, all
-with the same maps, team sizes and seeds; each ``--train LABEL=DIR`` (optional) the ``mrexplore train``
-folder that made the policy, whose ``stages.csv`` gives the kept stage and its validation steps. The
-first label is the reference: the paired differences hold it against every other, episode by episode.
+Each ``--runs LABEL=DIR`` names a folder ``mrexplore bench`` wrote, all with the same maps, team sizes and
+seeds; ``--strategy`` picks the strategy's rows (default hier); each ``--train LABEL=DIR`` (optional) the
+``mrexplore train`` folder that made the label's policy, whose ``stages.csv`` gives the kept stage and its
+validation steps. The first label is the reference: the paired differences hold it against every other,
+episode by episode.
 
-    python perf/policy_ablation.py --runs all=runs/abl_bench/all no_advantage=runs/abl_bench/no_advantage \\
+    python perf/compare_benches.py --runs all=runs/abl_bench/all no_advantage=runs/abl_bench/no_advantage \\
         --train all=runs/abl/all no_advantage=runs/abl/no_advantage --out docs/results/train/ablation/report.md
 """
 
@@ -44,21 +46,25 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--runs", nargs="+", required=True, help="LABEL=BENCH_DIR, the reference first")
     ap.add_argument("--train", nargs="*", default=[], help="LABEL=TRAIN_DIR (optional)")
+    ap.add_argument("--strategy", default="hier", help="whose rows to compare (default hier)")
     ap.add_argument("--out", type=Path, default=None, help="write the markdown here (default: print it)")
     args = ap.parse_args(argv)
     runs, trains = _pairs(args.runs, "--runs"), _pairs(args.train, "--train")
     rows = []
     for label, folder in runs.items():
-        mine = [r for r in read_rows(folder / "results.csv") if r["strategy"] == "hier"]
+        mine = [r for r in read_rows(folder / "results.csv") if r["strategy"] == args.strategy]
         if not mine:
-            raise SystemExit(f"{folder / 'results.csv'} holds no hier rows; bench with --strategies hier")
+            raise SystemExit(f"{folder / 'results.csv'} holds no {args.strategy} rows; bench that strategy")
         shas = {r["policy_sha256"] for r in mine}
         if len(shas) != 1:
             raise SystemExit(f"{folder} mixes {len(shas)} policies; give each policy its own bench folder")
         unique = {(r["map_path"], r["robots"], r["seed"]): dict(r, strategy=label) for r in mine}
         rows += unique.values()
     labels = list(runs)
-    parts = ["# Policy ablation", f"Made by: `python perf/policy_ablation.py {' '.join(sys.argv[1:])}`"]
+    parts = [
+        f"# {args.strategy}: separate benches compared",
+        f"Made by: `python perf/compare_benches.py {' '.join(sys.argv[1:])}`",
+    ]
     if trains:
         lines = ["| policy | kept stage | validation steps | untrained | sha256 |", "| --- | --- | --- | --- | --- |"]
         for label, folder in trains.items():
@@ -69,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     parts += [
         "## Steps by dataset (mean ± std)",
         steps_table(rows, labels, key="dataset"),
-        f"## Paired: {labels[0]} against each other policy (fewer steps %, 95% bootstrap interval)",
+        f"## Paired: {labels[0]} against each other run (fewer steps %, 95% bootstrap interval)",
         paired_table(rows, labels[0], labels, key="dataset"),
         "At equal coverage (steps to 99%):",
         paired_table(rows, labels[0], labels, key="dataset", metric="steps_to_99"),
