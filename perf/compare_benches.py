@@ -2,7 +2,8 @@
 ablation) or settings (``--config``).
 
 Each ``--runs LABEL=DIR`` names a folder ``mrexplore bench`` wrote, all with the same maps, team sizes and
-seeds; ``--strategy`` picks the strategy's rows (default hier); each ``--train LABEL=DIR`` (optional) the
+seeds; ``--strategy`` picks the strategy's rows (default hier), ``LABEL=DIR@STRATEGY`` another's for one
+label (a yardstick such as hier-heuristic); each ``--train LABEL=DIR`` (optional) the
 ``mrexplore train`` folder that made the label's policy, whose ``stages.csv`` gives the kept stage and its
 validation steps. The first label is the reference: the paired differences hold it against every other,
 episode by episode.
@@ -50,14 +51,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=None, help="write the markdown here (default: print it)")
     args = ap.parse_args(argv)
     runs, trains = _pairs(args.runs, "--runs"), _pairs(args.train, "--train")
-    rows = []
-    for label, folder in runs.items():
-        mine = [r for r in read_rows(folder / "results.csv") if r["strategy"] == args.strategy]
+    rows: list[dict[str, str]] = []
+    for label, where in runs.items():
+        folder_text, _, strategy = str(where).partition("@")
+        strategy = strategy or args.strategy
+        csv_path = Path(folder_text) / "results.csv"
+        mine = [r for r in read_rows(csv_path) if r["strategy"] == strategy]
         if not mine:
-            raise SystemExit(f"{folder / 'results.csv'} holds no {args.strategy} rows; bench that strategy")
+            raise SystemExit(f"{csv_path} holds no {strategy} rows; bench that strategy")
         shas = {r["policy_sha256"] for r in mine}
         if len(shas) != 1:
-            raise SystemExit(f"{folder} mixes {len(shas)} policies; give each policy its own bench folder")
+            raise SystemExit(f"{csv_path} mixes {len(shas)} policies; give each policy its own bench folder")
         unique = {(r["map_path"], r["robots"], r["seed"]): dict(r, strategy=label) for r in mine}
         rows += unique.values()
     labels = list(runs)
