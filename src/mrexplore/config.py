@@ -222,9 +222,12 @@ class PreprocessConfig(_Checked):
     alone (clusters under ``min_cluster_size`` members dropped after clustering), under which Mean-Shift
     gathers lone frontier cells near each other into clusters and robots chase them at the end of a
     mission."""
-    split_for_team: bool = False
-    """Where robots outnumber the Mean-Shift clusters, split the largest until there is one per robot
-    (:func:`~mrexplore.preprocessing.clustering.split_for_team`); False: the paper's clusters, robots share."""
+    split_for_team: bool = True
+    """Where robots outnumber the Mean-Shift clusters, cut the largest while it holds ``split_min_frontier_m``
+    of frontier or more, until there is one per robot
+    (:func:`~mrexplore.preprocessing.clustering.split_for_team`); False: the paper's clusters, robots share.
+    On a whole KTH floor at 0.05 m it took 16 robots to 99% coverage in 5,521 steps instead of 8,698; on
+    the dev set it changed none of 408 episodes with 3 robots (README, "Large floors and teams")."""
     split_min_frontier_m: float = 12.0
     """Under ``split_for_team``, a cluster is cut only while it holds this many metres of frontier (members
     x cell size) or more, >= 0: at 12, each half keeps about a sensor range (6 m) of it; a shorter frontier
