@@ -8,8 +8,8 @@ label (a yardstick such as hier-heuristic); each ``--train LABEL=DIR`` (optional
 validation steps. The first label is the reference: the paired differences hold it against every other,
 episode by episode.
 
-    python perf/compare_benches.py --runs all=runs/abl_bench/all no_advantage=runs/abl_bench/no_advantage \\
-        --train all=runs/abl/all no_advantage=runs/abl/no_advantage --out docs/results/train/ablation/report.md
+    python perf/compare_benches.py --runs all=BENCH_ALL no_advantage=BENCH_NOADV heuristic=BENCH_H@hier-heuristic \\
+        --train all=TRAIN_ALL no_advantage=TRAIN_NOADV --out report.md
 """
 
 from __future__ import annotations
@@ -34,8 +34,8 @@ def _pairs(items: list[str], flag: str) -> dict[str, Path]:
 
 
 def _kept(train_dir: Path) -> tuple[str, str, str]:
-    """The kept stage (fewest validation steps, the first of ties, as the trainer keeps it), its steps and
-    the untrained baseline's."""
+    """The stage with the fewest validation steps (the trainer keeps it), its steps and the untrained
+    baseline's."""
     with open(train_dir / "stages.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     best = min(rows, key=lambda r: float(r["val_steps_mean"]))
