@@ -23,13 +23,13 @@ from mrexplore.bench.report import paired_table, steps_table
 from mrexplore.bench.runner import read_rows
 
 
-def _pairs(items: list[str], flag: str) -> dict[str, Path]:
-    out: dict[str, Path] = {}
+def _pairs(items: list[str], flag: str) -> dict[str, str]:
+    out: dict[str, str] = {}
     for item in items:
         label, sep, path = item.partition("=")
         if not sep or not label or not path:
             raise SystemExit(f"{flag} {item!r}: give LABEL=DIR")
-        out[label] = Path(path)
+        out[label] = path
     return out
 
 
@@ -53,9 +53,9 @@ def main(argv: list[str] | None = None) -> int:
     runs, trains = _pairs(args.runs, "--runs"), _pairs(args.train, "--train")
     rows: list[dict[str, str]] = []
     for label, where in runs.items():
-        folder_text, _, strategy = str(where).partition("@")
+        folder, _, strategy = where.partition("@")
         strategy = strategy or args.strategy
-        csv_path = Path(folder_text) / "results.csv"
+        csv_path = Path(folder) / "results.csv"
         mine = [r for r in read_rows(csv_path) if r["strategy"] == strategy]
         if not mine:
             raise SystemExit(f"{csv_path} holds no {strategy} rows; bench that strategy")
@@ -72,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
     if trains:
         lines = ["| policy | kept stage | validation steps | untrained | sha256 |", "| --- | --- | --- | --- | --- |"]
         for label, folder in trains.items():
-            stage, steps, base = _kept(folder)
+            stage, steps, base = _kept(Path(folder))
             sha = next((r["policy_sha256"] for r in rows if r["strategy"] == label), "")[:12]
             lines.append(f"| {label} | {stage} | {steps} | {base} | {sha} |")
         parts += ["## Training (validation maps)", "\n".join(lines)]

@@ -313,9 +313,9 @@ def split_for_team(clusters: Clusters, robots: int, min_cluster_size: int, min_m
     Mean-Shift's bandwidth (a percentile of pairwise distances) gives about as many clusters for 16
     robots as for 3; robots sharing a cluster then route through the same sub-clusters. Here the cluster
     with the most members is cut in two at the median of its members along their principal axis, each
-    half's centre snapped to its member nearest the half's mean, until ``robots`` clusters exist or no
-    cluster has ``2 * min_cluster_size`` members nor ``min_members`` (a frontier too short to be worth
-    two robots). Unchanged when clusters suffice.
+    half's centre snapped to its member nearest the half's mean, until ``robots`` clusters exist or the
+    largest has fewer than ``2 * min_cluster_size`` members or fewer than ``min_members`` (a frontier too
+    short to be worth two robots). Unchanged when clusters suffice.
 
     Examples
     --------
