@@ -12,6 +12,7 @@ from scipy import ndimage
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, PreprocessConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import run_mission
+from mrexplore.paths.far_field import NearFarField
 from mrexplore.preprocessing.frontiers import Frontiers
 from mrexplore.strategies import _denoised_un, make_strategy
 from mrexplore.types import MrExploreError
@@ -81,6 +82,25 @@ def test_one_decision_by_hand() -> None:
     assert d.goals_rc.tolist() == [[2, 1], [2, 7]]  # each robot takes the end nearer to it
     assert d.paths[0].tolist() == [[2, 2], [2, 1]]
     assert d.paths[1].tolist() == [[2, 6], [2, 7]]
+
+
+def test_far_distances_on_a_large_map_decide_a_corridor_as_exact_ones_do() -> None:
+    # A corridor with unknown at both ends; the robot at column 30 is 9 cells from the right end, beyond
+    # an exact radius of 5 cells: its distance there is estimated on blocks of 2 x 2, its path searched.
+    state = state_grid("#" * 41 + "\n" + ("?" + "." * 39 + "?\n") * 3 + "#" * 41)
+    robots = np.array([[2, 5], [2, 30]], np.int32)
+    far_cfg = GlobalPlanningConfig(far_above_cells=0, exact_radius_m=0.25, coarse_cell_m=0.1)
+    exact, far = make_strategy("utility"), make_strategy("utility", far_cfg)
+    posed = far.pose(state, robots, 0.05)
+    assert posed.problem is not None and posed.work is not None
+    fields = posed.work.fields
+    assert all(isinstance(f, NearFarField) for f in fields)
+    assert isinstance(fields[1], NearFarField) and not fields[1].is_exact(2, 39)
+    assert fields[1].value(2, 39) == 9.0  # whole free blocks along row 1-2, then the last cell
+    d_exact, d_far = exact.decide(state, robots, 0.05), far.decide(state, robots, 0.05)
+    assert d_far.goals_rc.tolist() == d_exact.goals_rc.tolist() == [[2, 1], [2, 39]]
+    assert [p.tolist() for p in d_far.paths] == [p.tolist() for p in d_exact.paths]
+    assert d_far.paths[1].tolist() == [[2, c] for c in range(30, 40)]
 
 
 @pytest.mark.parametrize(("commitment", "goal"), [(1.0, [2, 7]), (0.4, [2, 1])])

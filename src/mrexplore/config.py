@@ -264,10 +264,33 @@ class GlobalPlanningConfig(_Checked):
     fraction of the distance to that goal, and a robot that keeps the cluster keeps its goal and route,
     in [0, 1]; 1: none (every decision starts afresh); None: the strategy's default (0.5 for strategies
     that go to cluster centres, 1 for hier, whose routes already commit)."""
+    far_above_cells: int = 1_000_000
+    """Once the known passable cells' bounding box holds more cells than this, robot distances are exact
+    only within ``exact_radius_m`` and estimated beyond it on a grid of ``coarse_cell_m`` blocks
+    (:mod:`~mrexplore.paths.far_field`; paths driven stay exact), >= 0; below it every distance is exact.
+    At 1 M no HouseExpo plan or DungeonMap (at 0.05 m or coarser) comes near it; a KTH floor at 0.05 m
+    passes it after a few hundred steps."""
+    exact_radius_m: float = 10.0
+    """Path length from a robot within which its distances stay exact on large maps, > 0 metres."""
+    coarse_cell_m: float = 0.2
+    """Side of the blocks that far distances are estimated on, > 0 metres (at least two cells)."""
 
     def _validate(self) -> None:
         _require(self.distance_weight >= 0, "distance_weight", ">= 0", self.distance_weight)
         _require(self.size_weight >= 0, "size_weight", ">= 0", self.size_weight)
+        _require(self.far_above_cells >= 0, "far_above_cells", ">= 0", self.far_above_cells)
+        _require(
+            math.isfinite(self.exact_radius_m) and self.exact_radius_m > 0,
+            "exact_radius_m",
+            "> 0 metres",
+            self.exact_radius_m,
+        )
+        _require(
+            math.isfinite(self.coarse_cell_m) and self.coarse_cell_m > 0,
+            "coarse_cell_m",
+            "> 0 metres",
+            self.coarse_cell_m,
+        )
         if self.commitment is not None:
             _require(0 <= self.commitment <= 1, "commitment", "in [0, 1] or None", self.commitment)
 

@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
+from mrexplore.boxes import mask_box
 from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig, SimConfig
 from mrexplore.global_planning.classical import GeodesicPlanner, NearestPlanner, UtilityPlanner
 from mrexplore.global_planning.coscan import cap_tasks, lloyd_clusters, sample_tasks, two_opt_tour
@@ -19,7 +20,8 @@ from mrexplore.global_planning.oracle import plan_oracle_routes
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem, GlobalPlanner
 from mrexplore.local_planning.router import LocalRouter
 from mrexplore.maps.ground_truth import GroundTruthMap, explorable_region
-from mrexplore.paths.distance_field import Field, descend_path, distance_fields, distance_matrix, distances_at
+from mrexplore.paths.distance_field import Field, distance_fields, distance_matrix, distances_at
+from mrexplore.paths.far_field import NearFarField, far_fields, path_to
 from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers, split_for_team
 from mrexplore.preprocessing.frontiers import Frontiers, detect_frontiers
 from mrexplore.types import BoolGrid, CellState, MrExploreError, StateGrid
@@ -79,6 +81,10 @@ class Decision:
 
 _NO_ROUTE = np.zeros((0, 2), dtype=np.int32)
 
+RobotField = Field | NearFarField
+"""A robot's distances at a decision: exact (:class:`Field`), or exact near it and estimated far away on a
+large map (:class:`~mrexplore.paths.far_field.NearFarField`)."""
+
 
 def _ended(state: StateGrid, frontiers: Frontiers, clusters: Clusters, n: int, reason: str) -> Decision:
     """A decision that ends the mission: no goal, route or path for anyone."""
@@ -93,17 +99,19 @@ def _decision(
     clusters: Clusters,
     assignment: Assignment,
     routes: list[NDArray[np.int32]],
-    fields: list[Field],
+    fields: list[RobotField],
     passable: BoolGrid,
+    robots_rc: NDArray[np.int32],
 ) -> Decision:
     """Each robot's goal is the first target of its route (empty: none); its path is read off its own
-    distance field, which already holds every shortest distance from it."""
+    distance field, which already holds every shortest distance from it (or, for a goal beyond the exact
+    part of a :class:`~mrexplore.paths.far_field.NearFarField`, searched along its coarse way there)."""
     goals = np.tile(NO_GOAL, (len(routes), 1))
     paths = []
     for i, route in enumerate(routes):
         if len(route):
             goals[i] = route[0]
-            paths.append(descend_path(fields[i], passable, tuple(goals[i])))
+            paths.append(path_to(fields[i], passable, tuple(robots_rc[i]), tuple(goals[i])))
         else:
             paths.append(_NO_ROUTE)
     return Decision(state, frontiers, clusters, assignment, goals, routes, paths, None)
@@ -149,7 +157,7 @@ class _Posed:
     """What layer 3 reuses from layer 1 and the distances of the same decision."""
 
     frontiers: Frontiers
-    fields: list[Field]
+    fields: list[RobotField]
     passable: BoolGrid
     kept: dict[int, tuple[int, NDArray[np.int32]]]
     candidates: CandidateSet | None = None
@@ -202,6 +210,9 @@ class ExplorationPipeline:
     oracle, whose goals are viewpoints)."""
     policy: dict[str, str] | None = None
     """Where a learned planner's weights came from: ``{"path", "sha256", "code_version"}``; None: no network."""
+    distances: GlobalPlanningConfig = field(default_factory=GlobalPlanningConfig)
+    """Where robot distances stop being exact on large maps (``far_above_cells``, ``exact_radius_m``,
+    ``coarse_cell_m``)."""
 
     def prepare(self, truth: GroundTruthMap, starts_rc: NDArray[np.integer], sim: SimConfig) -> None:
         """Called once before a mission; only a yardstick that knows the map uses it."""
@@ -209,7 +220,7 @@ class ExplorationPipeline:
     def _committed(
         self,
         clusters: Clusters,
-        fields: list[Field],
+        fields: list[RobotField],
         current: Sequence[NDArray[np.int32]],
         dist: NDArray[np.float64],
     ) -> dict[int, tuple[int, NDArray[np.int32]]]:
@@ -301,7 +312,9 @@ class ExplorationPipeline:
         # Every cell a field is read at from here on: centres, members (routes and goals), robots, current
         # goals. Each search stops once it has them all (a strategy that asked for whole fields has them).
         goals = [r[:1] for r in current] if current is not None else []
-        fields = fields_now(np.vstack([clusters.centers_rc, clusters.members_rc, robots_rc, *goals]))
+        targets = np.vstack([clusters.centers_rc, clusters.members_rc, robots_rc, *goals])
+        must = np.vstack([clusters.centers_rc, *goals])
+        fields = self._fields(passable, robots_rc, targets, must, resolution_m, computed)
         dist = np.stack([distances_at(f, clusters.centers_rc) for f in fields])
         kept = self._committed(clusters, fields, current, dist) if current is not None and self.commitment < 1 else {}
         if not np.isfinite(dist).any():
@@ -318,6 +331,30 @@ class ExplorationPipeline:
             rng=rng,
         )
         return PosedDecision(problem, None, _Posed(frontiers, fields, passable, kept, cand))
+
+    def _fields(
+        self,
+        passable: BoolGrid,
+        robots_rc: NDArray[np.int32],
+        targets_rc: NDArray[np.integer],
+        must_rc: NDArray[np.integer],
+        resolution_m: float,
+        computed: list[list[Field]],
+    ) -> list[RobotField]:
+        """Each robot's distances: whole fields where the strategy already asked for them, exact fields
+        stopped at ``targets_rc`` while the known passable box holds up to ``far_above_cells``, near/far
+        fields beyond it (``must_rc``, the centres and current goals, answered everywhere the exact
+        search does: :func:`~mrexplore.paths.far_field.far_fields`)."""
+        if computed:
+            return list(computed[0])
+        cfg = self.distances
+        box = mask_box(passable)
+        cells = 0 if box is None else (box[1] - box[0]) * (box[3] - box[2])
+        factor = round(cfg.coarse_cell_m / resolution_m)
+        if cells <= cfg.far_above_cells or factor < 2:
+            return list(distance_fields(passable, robots_rc, targets_rc))
+        radius = max(1, round(cfg.exact_radius_m / resolution_m))
+        return list(far_fields(passable, robots_rc, radius, factor, must_rc))
 
     def assign(self, posed: PosedDecision) -> Assignment:
         """The global layer's answer to a posed decision: the planner's, or the owners the strategy fixed."""
@@ -339,7 +376,7 @@ class ExplorationPipeline:
             _NO_ROUTE if k == UNASSIGNED else self.route(i, int(k), p, w)
             for i, k in enumerate(assignment.cluster_of_robot)
         ]
-        return _decision(p.state, w.frontiers, p.clusters, assignment, routes, w.fields, w.passable)
+        return _decision(p.state, w.frontiers, p.clusters, assignment, routes, w.fields, w.passable, p.robots_rc)
 
     def decide(
         self,
@@ -655,6 +692,7 @@ def make_strategy(
     if not local and pipeline.local is not None:
         pipeline.local = None
         pipeline.name += NO_LOCAL_SUFFIX
+    pipeline.distances = global_cfg or GlobalPlanningConfig()
     if isinstance(pipeline, CoScanPipeline) and coscan_cfg is not None:
         pipeline.coscan = coscan_cfg
     return pipeline

@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 
 from mrexplore.config import LocalPlanningConfig, PreprocessConfig
 from mrexplore.local_planning.routing import RouteProblem, reversal_search
-from mrexplore.paths.distance_field import FieldLike, distances_at, pairwise_distances
+from mrexplore.paths.distance_field import Distances, distances_at, pairwise_distances
 from mrexplore.preprocessing.clustering import cluster_frontiers
 from mrexplore.types import BoolGrid, GridRC
 
@@ -60,7 +60,7 @@ class LocalRouter:
         self,
         passable: BoolGrid,
         robot_rc: GridRC,
-        robot_field: FieldLike,
+        robot_field: Distances,
         members_rc: NDArray[np.int32],
         resolution_m: float,
     ) -> Route | None:

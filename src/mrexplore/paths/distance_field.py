@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import threading
 from dataclasses import dataclass
+from typing import Protocol
 
 import numba as nb
 import numpy as np
@@ -26,6 +27,8 @@ from mrexplore.types import BoolGrid, GridRC
 __all__ = [
     "Field",
     "FieldLike",
+    "DistanceLookup",
+    "Distances",
     "distance_field",
     "distance_fields",
     "distance_matrix",
@@ -90,6 +93,19 @@ class Field:
 
 FieldLike = Field | NDArray[np.float32]
 """A :class:`Field` or a whole-grid ``(H, W) float32`` array."""
+
+
+class DistanceLookup(Protocol):
+    """What reads distances from one source at cells: a :class:`Field`, or a
+    :class:`~mrexplore.paths.far_field.NearFarField` whose far values are estimates."""
+
+    def at(self, cells_rc: NDArray[np.integer]) -> NDArray[np.float64]: ...
+
+    def value(self, r: int, c: int) -> float: ...
+
+
+Distances = DistanceLookup | NDArray[np.float32]
+"""A :class:`DistanceLookup` or a whole-grid ``(H, W) float32`` array (:func:`distances_at` reads both)."""
 
 
 def _as_field(field: FieldLike) -> Field:
@@ -548,9 +564,11 @@ def descend_path(field: FieldLike, passable: BoolGrid, goal_rc: GridRC) -> NDArr
     return path
 
 
-def distances_at(field: FieldLike, cells_rc: NDArray[np.integer]) -> NDArray[np.float64]:
+def distances_at(field: Distances, cells_rc: NDArray[np.integer]) -> NDArray[np.float64]:
     """Look up a field at ``(k, 2) int`` cells: ``(k,) float64`` distances in cells (``inf`` where
     unreachable)."""
     if len(cells_rc) == 0:
         return np.zeros(0, dtype=np.float64)
-    return _as_field(field).at(cells_rc)
+    if isinstance(field, np.ndarray):
+        return Field.whole(field).at(cells_rc)
+    return field.at(cells_rc)

@@ -1,0 +1,164 @@
+"""Near/far distances: the seeded search against a plain Dijkstra, exactness near the robot, a thin wall
+the coarse grid never crosses, a narrow passage it closes, and paths to far goals."""
+
+from __future__ import annotations
+
+import heapq
+import math
+
+import numpy as np
+import pytest
+from conftest import bool_grid
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mrexplore.paths.astar import path_length_cells
+from mrexplore.paths.distance_field import _Searches, distance_fields
+from mrexplore.paths.far_field import Field, NearFarField, _seeded_search, far_fields, path_to
+
+
+def seeded_reference(passable: np.ndarray, seeds: list[tuple[int, int, float]]) -> np.ndarray:
+    """Plain heapq Dijkstra from many cells, each with its starting distance; same moves as the kernel."""
+    H, W = passable.shape
+    dist = np.full((H, W), np.inf)
+    heap = []
+    for r, c, k in seeds:
+        if passable[r, c] and k < dist[r, c]:
+            dist[r, c] = k
+            heap.append((k, (r, c)))
+    heapq.heapify(heap)
+    while heap:
+        d, (r, c) = heapq.heappop(heap)
+        if d > dist[r, c]:
+            continue
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                rr, cc = r + dr, c + dc
+                if (dr, dc) == (0, 0) or not (0 <= rr < H and 0 <= cc < W) or not passable[rr, cc]:
+                    continue
+                if dr and dc and not (passable[r, cc] and passable[rr, c]):
+                    continue
+                nd = d + (math.sqrt(2) if dr and dc else 1.0)
+                if nd < dist[rr, cc]:
+                    dist[rr, cc] = nd
+                    heapq.heappush(heap, (nd, (rr, cc)))
+    return dist
+
+
+def random_rooms(seed: int, shape: tuple[int, int] = (60, 80), walls: int = 12) -> np.ndarray:
+    """Open floor cut by thin straight walls (one cell thick) at random."""
+    rng = np.random.default_rng(seed)
+    g = np.ones(shape, bool)
+    for _ in range(walls):
+        r, c = int(rng.integers(0, shape[0])), int(rng.integers(0, shape[1]))
+        n = int(rng.integers(5, 30))
+        if rng.random() < 0.5:
+            g[r, c : c + n] = False
+        else:
+            g[r : r + n, c] = False
+    return g
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10**6))
+def test_seeded_search_equals_dijkstra_from_many_starts(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    g = rng.random((12, 15)) < 0.75
+    free = np.argwhere(g)
+    picks = free[rng.choice(len(free), size=min(len(free), int(rng.integers(1, 6))), replace=False)]
+    keys = rng.uniform(0, 6, len(picks)).astype(np.float32)
+    order = np.argsort(keys, kind="stable")
+    s = _Searches(g)
+    q_node, q_key, _ = s.scratch()
+    flat = s.padded(picks[order, 0] * g.shape[1] + picks[order, 1])
+    got = _seeded_search(s.start, s.wp, flat, keys[order], q_node, q_key).reshape(14, 17)[1:-1, 1:-1]
+    want = seeded_reference(g, [(int(r), int(c), float(k)) for (r, c), k in zip(picks, keys, strict=True)])
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-4)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 10**6))
+def test_exact_within_the_radius_and_coarse_blocks_never_shorter(seed: int) -> None:
+    g = random_rooms(seed)
+    src = np.argwhere(g)[np.random.default_rng(seed).integers(0, np.count_nonzero(g))]
+    exact = distance_fields(g, src[None])[0].full()
+    f = far_fields(g, src[None], radius_cells=12, factor=3)[0]
+    cells = np.argwhere(g)
+    got = f.at(cells)
+    e = exact[cells[:, 0], cells[:, 1]]
+    near = e <= 12
+    np.testing.assert_allclose(got[near], e[near], rtol=1e-6)
+    # A coarse distance is a real path through whole free blocks: never shorter than the exact one at
+    # the block's middle cell (the seeds are exact, every coarse move is a free straight or diagonal run).
+    blocks = np.argwhere(np.isfinite(f.coarse))
+    mids = f.grid.centres_rc(blocks)
+    assert (f.coarse[blocks[:, 0], blocks[:, 1]] * 3 >= exact[mids[:, 0], mids[:, 1]] - 1e-3).all()
+
+
+def test_a_thin_wall_is_gone_round_not_through() -> None:
+    # A one-cell wall along row 6 with a door at its right end; the robot top left, the target just below.
+    g = np.ones((12, 40), bool)
+    g[6, :36] = False
+    f = far_fields(g, np.array([[3, 2]]), radius_cells=5, factor=2)[0]
+    exact = distance_fields(g, np.array([[3, 2]]))[0].value(9, 2)
+    assert exact > 60  # round by the door
+    assert abs(f.value(9, 2) - exact) <= 2 * 2  # within a block's diagonal, never the 6 cells through the wall
+
+
+def test_a_passage_the_coarse_grid_closes_reads_inf_and_its_path_falls_back_to_an_exact_search() -> None:
+    g = ~bool_grid("""
+        ..........#.........
+        ..........#.........
+        ..........#.........
+        ....................
+        ..........#.........
+        ..........#.........
+    """)
+    f = far_fields(g, np.array([[0, 0]]), radius_cells=4, factor=3)[0]
+    assert f.value(0, 19) == math.inf  # the one-cell gap in the wall closes every block around it
+    path = path_to(f, g, (0, 0), (0, 19))
+    exact = distance_fields(g, np.array([[0, 0]]))[0].value(0, 19)
+    assert path[0].tolist() == [0, 0] and path[-1].tolist() == [0, 19]
+    assert path_length_cells(path) == pytest.approx(exact)
+    # A cell the caller must have: searched back from it exactly, once for every source.
+    both = far_fields(g, np.array([[0, 0], [5, 0]]), radius_cells=4, factor=3, must_rc=np.array([[0, 19]]))
+    from_below = distance_fields(g, np.array([[5, 0]]))[0].value(0, 19)
+    assert [b.value(0, 19) for b in both] == [pytest.approx(exact), pytest.approx(from_below)]
+    assert both[0].known and both[1].known  # read from the search back, not estimated
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(0, 10**6))
+def test_paths_to_far_goals_are_valid_and_near_shortest(seed: int) -> None:
+    g = random_rooms(seed, (50, 70), 10)
+    rng = np.random.default_rng(seed)
+    free = np.argwhere(g)
+    src = tuple(int(v) for v in free[rng.integers(0, len(free))])
+    exact = distance_fields(g, np.array([src]))[0]
+    f = far_fields(g, np.array([src]), radius_cells=8, factor=2)[0]
+    for goal in free[rng.choice(len(free), 8)]:
+        goal_t = (int(goal[0]), int(goal[1]))
+        path = path_to(f, g, src, goal_t)
+        if not np.isfinite(exact.value(*goal_t)):
+            assert len(path) == 0
+            continue
+        assert path[0].tolist() == list(src) and path[-1].tolist() == list(goal_t)
+        assert g[path[:, 0], path[:, 1]].all()
+        steps = np.abs(np.diff(path.astype(int), axis=0))
+        assert (steps.max(axis=1) == 1).all()
+        diag = (steps == 1).all(axis=1)  # no corner cut by a diagonal step
+        a, b = path[:-1][diag], path[1:][diag]
+        assert g[a[:, 0], b[:, 1]].all() and g[b[:, 0], a[:, 1]].all()
+        # Exact inside the corridor along the coarse way: no longer than the estimate the planners read,
+        # up to the last block's diagonal (where the exact path squeezes through a gap the coarse grid
+        # closes, both are longer than the shortest).
+        assert path_length_cells(path) <= f.value(*goal_t) + 2 * 2 * math.sqrt(2) + 1e-4
+
+
+def test_exact_fields_read_through_path_to_as_before() -> None:
+    g = np.ones((5, 8), bool)
+    g[0:4, 4] = False
+    exact = distance_fields(g, np.array([[0, 0]]))[0]
+    assert isinstance(exact, Field)
+    assert path_to(exact, g, (0, 0), (0, 7)).tolist()[-1] == [0, 7]
+    assert not isinstance(exact, NearFarField)
