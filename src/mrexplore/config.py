@@ -272,8 +272,11 @@ class GlobalPlanningConfig(_Checked):
     passes it after a few hundred steps."""
     exact_radius_m: float = 10.0
     """Path length from a robot within which its distances stay exact on large maps, > 0 metres."""
-    coarse_cell_m: float = 0.2
-    """Side of the blocks that far distances are estimated on, > 0 metres (at least two cells)."""
+    coarse_cell_m: float = 0.15
+    """Side of the blocks that far distances are estimated on, > 0 metres (under two cells: all exact).
+    Late on a KTH floor at 0.05 m, blocks of 0.2 m left cluster centres in ragged, ray-lit free space
+    unreached (each then costs an exact search back from it); 0.15 m reached all of them
+    (``perf/bench_far_fields.py``)."""
 
     def _validate(self) -> None:
         _require(self.distance_weight >= 0, "distance_weight", ">= 0", self.distance_weight)

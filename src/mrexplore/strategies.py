@@ -313,8 +313,8 @@ class ExplorationPipeline:
         # goals. Each search stops once it has them all (a strategy that asked for whole fields has them).
         goals = [r[:1] for r in current] if current is not None else []
         targets = np.vstack([clusters.centers_rc, clusters.members_rc, robots_rc, *goals])
-        must = np.vstack([clusters.centers_rc, *goals])
-        fields = self._fields(passable, robots_rc, targets, must, resolution_m, computed)
+        own = goals if self.commitment < 1 else []  # a robot's own goal is read for hysteresis only
+        fields = self._fields(passable, robots_rc, targets, clusters.centers_rc, own, resolution_m, computed)
         dist = np.stack([distances_at(f, clusters.centers_rc) for f in fields])
         kept = self._committed(clusters, fields, current, dist) if current is not None and self.commitment < 1 else {}
         if not np.isfinite(dist).any():
@@ -338,13 +338,14 @@ class ExplorationPipeline:
         robots_rc: NDArray[np.int32],
         targets_rc: NDArray[np.integer],
         must_rc: NDArray[np.integer],
+        own_rc: Sequence[NDArray[np.int32]],
         resolution_m: float,
         computed: list[list[Field]],
     ) -> list[RobotField]:
         """Each robot's distances: whole fields where the strategy already asked for them, exact fields
         stopped at ``targets_rc`` while the known passable box holds up to ``far_above_cells``, near/far
-        fields beyond it (``must_rc``, the centres and current goals, answered everywhere the exact
-        search does: :func:`~mrexplore.paths.far_field.far_fields`)."""
+        fields beyond it (``must_rc``, the centres, and each robot's ``own_rc``, its goal, answered
+        wherever the exact search does: :func:`~mrexplore.paths.far_field.far_fields`)."""
         if computed:
             return list(computed[0])
         cfg = self.distances
@@ -354,7 +355,7 @@ class ExplorationPipeline:
         if cells <= cfg.far_above_cells or factor < 2:
             return list(distance_fields(passable, robots_rc, targets_rc))
         radius = max(1, round(cfg.exact_radius_m / resolution_m))
-        return list(far_fields(passable, robots_rc, radius, factor, must_rc))
+        return list(far_fields(passable, robots_rc, radius, factor, must_rc, own_rc))
 
     def assign(self, posed: PosedDecision) -> Assignment:
         """The global layer's answer to a posed decision: the planner's, or the owners the strategy fixed."""

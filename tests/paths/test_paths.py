@@ -178,3 +178,20 @@ def test_a_field_stops_at_its_farthest_target() -> None:
     corridor = np.ones((1, 8), bool)
     f = distance_fields(corridor, np.array([[0, 0]]), np.array([[0, 3], [0, 2]]))[0]
     assert f.full()[0].tolist() == [0, 1, 2, 3, *[math.inf] * 4]
+
+
+def test_astar_reuses_its_arrays_without_leaking_between_calls() -> None:
+    # Grids of one cell count share the scratch arrays (stamped by call); shapes differ, results must not.
+    wide = ~bool_grid("""
+        ......
+        .####.
+        ......
+        ......
+    """)
+    tall = np.ones((6, 4), bool)
+    tall[1:5, 1] = False
+    first = astar_path(wide, (0, 0), (3, 5)).tolist()
+    assert astar_path(tall, (0, 0), (5, 0)).tolist() == [[0, 0], [1, 0], [2, 0], [3, 0], [4, 0], [5, 0]]
+    assert astar_path(wide, (1, 0), (1, 5)).tolist()[-1] == [1, 5]
+    assert astar_path(wide, (0, 0), (3, 5)).tolist() == first
+    assert astar_path(tall, (0, 2), (2, 1)).tolist() == []  # a wall cell: no path, whatever came before

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import threading
 
 import numba as nb
 import numpy as np
@@ -58,29 +59,39 @@ def _heap_pop(keys: np.ndarray, vals: np.ndarray, size: int) -> int:  # pragma: 
 
 
 @nb.njit(cache=True, nogil=True)
-def _astar(passable: np.ndarray, sr: int, sc: int, gr: int, gc: int) -> np.ndarray:  # pragma: no cover
+def _astar(
+    passable: np.ndarray,
+    sr: int,
+    sc: int,
+    gr: int,
+    gc: int,
+    g: np.ndarray,
+    parent: np.ndarray,
+    stamp: np.ndarray,
+    gen: int,
+    keys: np.ndarray,
+    vals: np.ndarray,
+) -> np.ndarray:  # pragma: no cover - numba
+    """A* from ``(sr, sc)`` to ``(gr, gc)``. ``g``, ``parent``, ``stamp`` (one per cell) and the heap's
+    ``keys``/``vals`` are the caller's scratch, reused from call to call: a cell's ``g`` and ``parent``
+    count only where ``stamp`` holds ``gen`` (``-gen`` once closed), so nothing is cleared between calls
+    (filling them afresh cost more than the search on a large floor: 20 ms a path at 4.9 M cells)."""
     H, W = passable.shape
     empty = np.zeros((0, 2), dtype=np.int32)
     if not passable[sr, sc] or not passable[gr, gc]:
         return empty
-    n = H * W
-    g = np.full(n, np.inf, dtype=np.float64)
-    parent = np.full(n, -1, dtype=np.int32)
-    closed = np.zeros(n, dtype=np.bool_)
-    cap = 8 * n + 1
-    keys = np.empty(cap, dtype=np.float64)
-    vals = np.empty(cap, dtype=np.int32)
     s = sr * W + sc
     goal = gr * W + gc
     g[s] = 0.0
+    stamp[s] = gen
     size = _heap_push(keys, vals, 0, _octile(sr, sc, gr, gc), s)
     found = False
     while size > 0:
         u = vals[0]
         size = _heap_pop(keys, vals, size)
-        if closed[u]:
-            continue
-        closed[u] = True
+        if stamp[u] == -gen:
+            continue  # closed
+        stamp[u] = -gen
         if u == goal:
             found = True
             break
@@ -94,9 +105,12 @@ def _astar(passable: np.ndarray, sr: int, sc: int, gr: int, gc: int) -> np.ndarr
             cc = c + DC[d]
             v = rr * W + cc
             nd = g[u] + step
-            if nd < g[v] - 1e-12:
+            seen = stamp[v] == gen or stamp[v] == -gen
+            if not seen or nd < g[v] - 1e-12:
                 g[v] = nd
                 parent[v] = u
+                if not seen:
+                    stamp[v] = gen
                 size = _heap_push(keys, vals, size, nd + _octile(rr, cc, gr, gc), v)
     if not found:
         return empty
@@ -115,6 +129,30 @@ def _astar(passable: np.ndarray, sr: int, sc: int, gr: int, gc: int) -> np.ndarr
     return out
 
 
+class _Scratch(threading.local):
+    """Each thread's A* arrays for grids of one cell count, kept between calls."""
+
+    def __init__(self) -> None:
+        self.cells = -1
+        self.gen = 0
+
+    def arrays(self, n: int) -> tuple[int, tuple[np.ndarray, ...]]:
+        """The next generation number and the arrays for a grid of ``n`` cells."""
+        if n != self.cells or self.gen >= np.iinfo(np.int32).max - 1:
+            cap = 8 * n + 1  # every relaxation may push once
+            self.g = np.empty(n, dtype=np.float64)
+            self.parent = np.empty(n, dtype=np.int32)
+            self.stamp = np.zeros(n, dtype=np.int32)
+            self.keys = np.empty(cap, dtype=np.float64)
+            self.vals = np.empty(cap, dtype=np.int32)
+            self.cells, self.gen = n, 0
+        self.gen += 1
+        return self.gen, (self.g, self.parent, self.stamp)
+
+
+_SCRATCH = _Scratch()
+
+
 def astar_path(passable: BoolGrid, start_rc: GridRC, goal_rc: GridRC) -> NDArray[np.int32]:
     """Shortest path from ``start_rc`` to ``goal_rc`` over passable cells.
 
@@ -130,7 +168,20 @@ def astar_path(passable: BoolGrid, start_rc: GridRC, goal_rc: GridRC) -> NDArray
     """
     if passable.dtype != np.bool_:
         passable = passable.astype(bool)
-    return _astar(np.ascontiguousarray(passable), int(start_rc[0]), int(start_rc[1]), int(goal_rc[0]), int(goal_rc[1]))
+    gen, (g, parent, stamp) = _SCRATCH.arrays(int(passable.size))
+    return _astar(
+        np.ascontiguousarray(passable),
+        int(start_rc[0]),
+        int(start_rc[1]),
+        int(goal_rc[0]),
+        int(goal_rc[1]),
+        g,
+        parent,
+        stamp,
+        gen,
+        _SCRATCH.keys,
+        _SCRATCH.vals,
+    )
 
 
 def path_length_cells(path_rc: NDArray[np.integer]) -> float:

@@ -16,6 +16,7 @@ search (:func:`far_fields`).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numba as nb
@@ -329,14 +330,18 @@ def far_fields(
     radius_cells: int,
     factor: int,
     must_rc: NDArray[np.integer] | None = None,
+    own_rc: Sequence[NDArray[np.integer]] | None = None,
 ) -> list[NearFarField]:
     """One :class:`NearFarField` per source: exact up to ``radius_cells``, blocks of ``factor`` x ``factor``
     cells beyond.
 
     ``must_rc`` (``(k, 2) int``, e.g. cluster centres): cells every field must answer where the exact
     search does; one the coarse grid leaves at ``inf`` for some source (behind a passage it closes) gets
-    one exact search from it, stopped once it has reached every source (distances are symmetric), and
-    those values go into each field's :attr:`~NearFarField.known`.
+    a near/far field of its own, read at the sources (distances are symmetric; its exact part goes
+    through the passage), and an exact search from it to the sources that one leaves at ``inf`` too;
+    those values go into each field's :attr:`~NearFarField.known`. ``own_rc``: per source, cells only
+    that source must answer (its current goal); where the coarse grid leaves one at ``inf``, an exact
+    search from the source stopped at them.
 
     Examples
     --------
@@ -358,9 +363,21 @@ def far_fields(
     fields = map_threads(lambda src: _one(passable, grid, src, radius_cells), list(sources))
     if must_rc is not None and len(must_rc) and len(fields):
         must = np.unique(np.asarray(must_rc, np.int64).reshape(-1, 2), axis=0)
-        unseen = ~np.isfinite(np.stack([f.at(must) for f in fields])).all(axis=0)
-        for cell, back in zip(must[unseen], distance_fields(passable, must[unseen], sources), strict=True):
-            for f, d in zip(fields, back.at(sources), strict=True):
+        missing = ~np.isfinite(np.stack([f.at(must) for f in fields])).all(axis=0)
+        for cell in must[missing]:
+            # From the cell: exact through its passage, then the coarse grid; exact all the way if need be.
+            d = _one(passable, grid, cell, radius_cells).at(sources)
+            still = ~np.isfinite(d)
+            if still.any():
+                d[still] = distance_fields(passable, cell[None], sources[still])[0].at(sources[still])
+            for f, v in zip(fields, d, strict=True):
+                f.known[(int(cell[0]), int(cell[1]))] = float(v)
+    for f, src, own in zip(fields, sources, own_rc or [], strict=False):
+        cells = np.asarray(own, np.int64).reshape(-1, 2)
+        unseen = cells[~np.isfinite(f.at(cells))]
+        if len(unseen):
+            exact = distance_fields(passable, src[None], unseen)[0]
+            for cell, d in zip(unseen, exact.at(unseen), strict=True):
                 f.known[(int(cell[0]), int(cell[1]))] = float(d)
     return fields
 
