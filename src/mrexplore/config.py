@@ -264,12 +264,12 @@ class GlobalPlanningConfig(_Checked):
     fraction of the distance to that goal, and a robot that keeps the cluster keeps its goal and route,
     in [0, 1]; 1: none (every decision starts afresh); None: the strategy's default (0.5 for strategies
     that go to cluster centres, 1 for hier, whose routes already commit)."""
-    far_above_cells: int = 1_000_000
+    far_above_cells: int = 2_000_000
     """Once the known passable cells' bounding box holds more cells than this, robot distances are exact
     only within ``exact_radius_m`` and estimated beyond it on a grid of ``coarse_cell_m`` blocks
     (:mod:`~mrexplore.paths.far_field`; paths driven stay exact), >= 0; below it every distance is exact.
-    At 1 M no HouseExpo plan or DungeonMap (at 0.05 m or coarser) comes near it; a KTH floor at 0.05 m
-    passes it after a few hundred steps."""
+    Every dev map but the KTH floors is smaller than 2 M cells at 0.05 m (the largest, the ROS basement,
+    has 1.44 M), so their results stay exact; a KTH floor at 0.05 m (up to 4.9 M) passes it."""
     exact_radius_m: float = 10.0
     """Path length from a robot within which its distances stay exact on large maps, > 0 metres."""
     coarse_cell_m: float = 0.15
