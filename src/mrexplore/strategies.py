@@ -349,11 +349,12 @@ class ExplorationPipeline:
         if computed:
             return list(computed[0])
         cfg = self.distances
-        box = mask_box(passable)
-        cells = 0 if box is None else (box[1] - box[0]) * (box[3] - box[2])
         factor = round(cfg.coarse_cell_m / resolution_m)
-        if cells <= cfg.far_above_cells or factor < 2:
+        if passable.size <= cfg.far_above_cells or factor < 2:
             return list(distance_fields(passable, robots_rc, targets_rc))
+        box = mask_box(passable)
+        if box is None or (box[1] - box[0]) * (box[3] - box[2]) <= cfg.far_above_cells:
+            return list(distance_fields(passable, robots_rc, targets_rc, box=box))
         radius = max(1, round(cfg.exact_radius_m / resolution_m))
         return list(far_fields(passable, robots_rc, radius, factor, must_rc, own_rc))
 

@@ -19,7 +19,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import mask_box
+from mrexplore.boxes import Box, mask_box
 from mrexplore.paths.moves import DC, DR, move_cost
 from mrexplore.threads import map_threads, thread_count
 from mrexplore.types import BoolGrid, GridRC
@@ -364,10 +364,10 @@ def distance_field(passable: BoolGrid, source_rc: GridRC) -> NDArray[np.float32]
     return np.ascontiguousarray(_Searches(passable)(int(source_rc[0]), int(source_rc[1])))
 
 
-def _crop(passable: BoolGrid) -> tuple[np.ndarray, int, int] | None:
-    """The passable cells' bounding box as a contiguous crop, with its first row and column; None when
-    nothing is passable."""
-    box = mask_box(passable)
+def _crop(passable: BoolGrid, box: Box | None = None) -> tuple[np.ndarray, int, int] | None:
+    """The passable cells' bounding box (``box`` where the caller has it) as a contiguous crop, with its
+    first row and column; None when nothing is passable."""
+    box = mask_box(passable) if box is None else box
     if box is None:
         return None
     r0, r1, c0, c1 = box
@@ -375,7 +375,10 @@ def _crop(passable: BoolGrid) -> tuple[np.ndarray, int, int] | None:
 
 
 def distance_fields(
-    passable: BoolGrid, sources_rc: NDArray[np.integer], targets_rc: NDArray[np.integer] | None = None
+    passable: BoolGrid,
+    sources_rc: NDArray[np.integer],
+    targets_rc: NDArray[np.integer] | None = None,
+    box: Box | None = None,
 ) -> list[Field]:
     """One distance field per source (as :func:`distance_field`), computed and kept on the passable
     cells' bounding box, on the shared threads.
@@ -386,6 +389,9 @@ def distance_fields(
         ``(k, 2) int`` the only cells the caller will read (and paths to them): each search stops once it
         has reached all of them. Every finite value is then exact; cells farther from the source than
         every target read ``inf``. None: every cell.
+    box:
+        The passable cells' bounding box (:func:`~mrexplore.boxes.mask_box`), where the caller already
+        has it (a pass over a 4.9 M-cell grid costs milliseconds); None: found here.
 
     Returns
     -------
@@ -401,7 +407,7 @@ def distance_fields(
     if passable.dtype != np.bool_:
         passable = passable.astype(bool)
     shape = (int(passable.shape[0]), int(passable.shape[1]))
-    cropped = _crop(passable)
+    cropped = _crop(passable, box)
     if cropped is None:
         return [Field(np.full((0, 0), np.inf, dtype=np.float32), 0, 0, shape) for _ in range(len(sources_rc))]
     crop, r0, c0 = cropped
