@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 
 from mrexplore.types import BoolGrid
 
-__all__ = ["Box", "mask_box", "grown_slices", "cells_of"]
+__all__ = ["Box", "mask_box", "grown_slices", "box_union", "cells_of"]
 
 Box = tuple[int, int, int, int]
 """``(r0, r1, c0, c1)``: half-open rows and columns."""
@@ -44,6 +44,19 @@ def grown_slices(box: Box, margin: int, shape: tuple[int, int]) -> tuple[slice, 
     r0, r1, c0, c1 = box
     H, W = shape
     return slice(max(r0 - margin, 0), min(r1 + margin, H)), slice(max(c0 - margin, 0), min(c1 + margin, W))
+
+
+def box_union(a: Box | None, b: Box) -> Box:
+    """The smallest box holding ``a`` (None: nothing) and ``b``.
+
+    Examples
+    --------
+    >>> box_union((1, 4, 2, 5), (0, 2, 3, 9)), box_union(None, (0, 2, 3, 9))
+    ((0, 4, 2, 9), (0, 2, 3, 9))
+    """
+    if a is None:
+        return b
+    return min(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), max(a[3], b[3])
 
 
 def cells_of(mask: BoolGrid) -> NDArray[np.int64]:

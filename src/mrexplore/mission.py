@@ -426,8 +426,9 @@ class Mission:
         )
 
     def _centre_ms(self, t: float) -> float:
-        """The centre's time since ``t``: decoding, rebuilding and planning; the robots encode on board."""
-        return (time.perf_counter() - t) * 1e3 - self.link.robot_ms
+        """The centre's time since ``t``: decoding, rebuilding and planning; the robots encode on board, and
+        the byte accounting is neither's work."""
+        return (time.perf_counter() - t) * 1e3 - self.link.robot_ms - self.link.accounting_ms
 
     def decide(self) -> Decision | None:
         """Take the pending decision with the strategy's own planner and apply it; None where the centre

@@ -60,12 +60,12 @@ def test_codes_carry_the_paper_labels() -> None:
 
 def test_seeds_one_per_component_with_interior() -> None:
     state = state_grid(ROOMS)
-    seeds = component_seeds(state == F, neighbour_codes(state), (3, 2))
+    seeds = component_seeds(state, neighbour_codes(state), (3, 2))
     # The robot's room seeds at the robot; the right room (interior) at its first interior cell; the
     # pocket at (6, 3) and the strip at (2..4, 12..13) are all boundary and need no seed.
     assert [divmod(int(s), 15) for s in seeds] == [(3, 2)]
     state[3, 5] = O  # cut the corridor: the rooms become two components
-    seeds = component_seeds(state == F, neighbour_codes(state), (3, 2))
+    seeds = component_seeds(state, neighbour_codes(state), (3, 2))
     assert [divmod(int(s), 15) for s in seeds] == [(3, 2), (3, 7)]
 
 

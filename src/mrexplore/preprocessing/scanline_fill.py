@@ -8,7 +8,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-__all__ = ["scanline_fill", "pick_seeds", "neighbour_codes_kernel", "mark_coded_cells"]
+__all__ = ["scanline_fill", "pick_seeds", "coded_cells", "neighbour_codes_kernel", "mark_coded_cells"]
 
 _FREE, _OCCUPIED, _UNKNOWN = 0, 1, 2  # CellState values
 _DR = (-1, 1, 0, 0)
@@ -55,26 +55,48 @@ def scanline_fill(codes: np.ndarray, seeds: np.ndarray, filled: np.ndarray) -> N
 
 
 @nb.njit(cache=True)
-def pick_seeds(codes: np.ndarray, free: np.ndarray, position: int) -> np.ndarray:  # pragma: no cover - numba
+def pick_seeds(codes: np.ndarray, state: np.ndarray, position: int) -> np.ndarray:  # pragma: no cover - numba
     """Row-major indices of the fewest seeds from which :func:`scanline_fill` with ``codes`` reaches every
-    free cell: the robot's cell (``position``, if free) first, then the first interior cell (code 0) not
-    yet reached, repeatedly. Cells with a code are in the message anyway; a component made only of them
-    needs no seed."""
+    free cell of the CellState grid ``state``: the robot's cell (``position``, if free) first, then the
+    first interior cell (code 0) not yet reached, repeatedly. Cells with a code are in the message anyway;
+    a component made only of them needs no seed."""
     H, W = codes.shape
     filled = np.zeros((H, W), dtype=np.bool_)
     out = []
-    if free.ravel()[position]:
+    if state[position // W, position % W] == _FREE:
         out.append(position)
         scanline_fill(codes, np.array([position], dtype=np.int64), filled)
     for r in range(H):
         for c in range(W):
-            if free[r, c] and codes[r, c] == 0 and not filled[r, c]:
+            if state[r, c] == _FREE and codes[r, c] == 0 and not filled[r, c]:
                 out.append(r * W + c)
                 scanline_fill(codes, np.array([r * W + c], dtype=np.int64), filled)
     seeds = np.empty(len(out), dtype=np.int64)
     for k in range(len(out)):
         seeds[k] = out[k]
     return seeds
+
+
+@nb.njit(cache=True)
+def coded_cells(codes: np.ndarray, r0: int, c0: int, width: int) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
+    """The cells of a window of codes (its first cell at ``(r0, c0)`` of a map ``width`` wide) that have a
+    code: their row-major indices in the map, increasing, and their codes."""
+    H, W = codes.shape
+    n = 0
+    for r in range(H):
+        for c in range(W):
+            if codes[r, c] != 0:
+                n += 1
+    cells = np.empty(n, dtype=np.int64)
+    values = np.empty(n, dtype=np.uint8)
+    k = 0
+    for r in range(H):
+        for c in range(W):
+            if codes[r, c] != 0:
+                cells[k] = (r + r0) * width + c + c0
+                values[k] = codes[r, c]
+                k += 1
+    return cells, values
 
 
 @nb.njit(cache=True)

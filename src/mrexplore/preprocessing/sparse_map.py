@@ -17,8 +17,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.preprocessing.scanline_fill import neighbour_codes_kernel, pick_seeds
-from mrexplore.types import BoolGrid, CellState, GridRC, StateGrid
+from mrexplore.boxes import Box
+from mrexplore.preprocessing.scanline_fill import coded_cells, neighbour_codes_kernel, pick_seeds
+from mrexplore.types import CellState, GridRC, StateGrid  # noqa: F401 - CellState: the examples use it
 
 __all__ = [
     "SparseFrontierMap",
@@ -26,7 +27,9 @@ __all__ = [
     "neighbour_codes",
     "component_seeds",
     "sparse_frontier_map",
+    "coded_frontier_map",
     "changed_since",
+    "changed_in_box",
     "apply_delta",
     "FULL",
 ]
@@ -108,13 +111,12 @@ def neighbour_codes(state: StateGrid) -> NDArray[np.uint8]:
     return neighbour_codes_kernel(np.ascontiguousarray(state, dtype=np.uint8))
 
 
-def component_seeds(free: BoolGrid, codes: NDArray[np.uint8], position_rc: GridRC) -> NDArray[np.int64]:
-    """One seed per 4-connected free component that has an interior cell (code 0): the robot's cell for
-    its own component, the first interior cell in row-major order for the others, sorted. Components
-    made of boundary cells only need none: every one of their cells is in the message."""
+def component_seeds(state: StateGrid, codes: NDArray[np.uint8], position_rc: GridRC) -> NDArray[np.int64]:
+    """One seed per 4-connected free component of ``state`` that has an interior cell (code 0): the
+    robot's cell for its own component, the first interior cell in row-major order for the others,
+    sorted. Components made of boundary cells only need none: every one of their cells is in the message."""
     r, c = position_rc
-    seeds = pick_seeds(np.ascontiguousarray(codes), np.ascontiguousarray(free), r * free.shape[1] + c)
-    return np.sort(seeds)
+    return np.sort(pick_seeds(codes, state, r * state.shape[1] + c))
 
 
 def sparse_frontier_map(
@@ -148,16 +150,27 @@ def sparse_frontier_map(
     >>> sparse_frontier_map(big[1:6, 1:6], 0, 0, (3, 3), origin_rc=(1, 1), shape=(7, 7)) == whole
     True
     """
+    return coded_frontier_map(state, neighbour_codes(state), robot, round_, position_rc, origin_rc, shape)
+
+
+def coded_frontier_map(
+    state: StateGrid,
+    codes: NDArray[np.uint8],
+    robot: int,
+    round_: int,
+    position_rc: GridRC,
+    origin_rc: GridRC = (0, 0),
+    shape: tuple[int, int] | None = None,
+) -> SparseFrontierMap:
+    """:func:`sparse_frontier_map` from a grid whose neighbour codes (``(h, w) uint8``, those of
+    :func:`neighbour_codes` on the whole map, cut to the window) the robot already holds."""
     shape = state.shape if shape is None else shape
     r0, c0 = origin_rc
     r, c = int(position_rc[0]), int(position_rc[1])
-    codes = neighbour_codes(state)
-    local = np.flatnonzero(codes.ravel()).astype(np.int64)
-    seeds = component_seeds(state == CellState.FREE, codes, (r - r0, c - c0))
-    w = state.shape[1]
-    cells = _to_map(local, w, r0, c0, shape[1])
+    cells, values = coded_cells(codes, r0, c0, shape[1])
+    seeds = component_seeds(state, codes, (r - r0, c - c0))
     return SparseFrontierMap(
-        robot, round_, shape, (r, c), cells, codes.ravel()[local], _to_map(seeds, w, r0, c0, shape[1])
+        robot, round_, shape, (r, c), cells, values, _to_map(seeds, state.shape[1], r0, c0, shape[1])
     )
 
 
@@ -190,6 +203,26 @@ def changed_since(
         current.shape,
         current.position_rc,
         _to_map(local, w, rows.start, cols.start, width),
+        now.ravel()[local],
+        current.seeds,
+        base_round,
+    )
+
+
+def changed_in_box(
+    previous: NDArray[np.uint8], codes: NDArray[np.uint8], current: SparseFrontierMap, base_round: int, box: Box
+) -> SparseFrontierMap:
+    """:func:`changed_since` when the sender holds its whole code grid ``codes`` ``(H, W) uint8`` and knows
+    that no code changed since ``base_round`` outside ``box``: compares there alone (same message)."""
+    rows, cols = slice(box[0], box[1]), slice(box[2], box[3])
+    now = codes[rows, cols]
+    local = np.flatnonzero(now != previous[rows, cols]).astype(np.int64)
+    return SparseFrontierMap(
+        current.robot,
+        current.round,
+        current.shape,
+        current.position_rc,
+        _to_map(local, now.shape[1], box[0], box[2], current.shape[1]),
         now.ravel()[local],
         current.seeds,
         base_round,

@@ -13,20 +13,28 @@ from __future__ import annotations
 
 import time
 import zlib
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import mask_box
+from mrexplore.boxes import Box, box_union, mask_box
 from mrexplore.config import PreprocessConfig, SensorConfig
-from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
+from mrexplore.preprocessing.frontiers import closing_reach
+from mrexplore.preprocessing.onboard import OnBoardGrid
 from mrexplore.preprocessing.reconstruction import CentreMap, free_iou
 from mrexplore.preprocessing.sparse_codec import HEADER, decode, encode
-from mrexplore.preprocessing.sparse_map import FULL, SparseFrontierMap, changed_since, sparse_frontier_map
-from mrexplore.sim.belief import Belief, classify
+from mrexplore.preprocessing.sparse_map import (
+    FULL,
+    SparseFrontierMap,
+    changed_in_box,
+    changed_since,
+    coded_frontier_map,
+    sparse_frontier_map,
+)
+from mrexplore.sim.belief import Belief
 from mrexplore.types import CellState, StateGrid
 
 __all__ = ["TeamLink", "LinkStatus", "RobotSender", "TransmissionTotals", "occupancy_grid_bytes", "TRANSMISSION_MODES"]
@@ -37,6 +45,7 @@ _ROS_VALUES = {CellState.FREE: 0, CellState.OCCUPIED: 100, CellState.UNKNOWN: -1
 _ROS_LUT = np.zeros(len(CellState), dtype=np.int8)
 for _state, _value in _ROS_VALUES.items():
     _ROS_LUT[_state] = _value
+_EMPTY: Box = (0, 0, 0, 0)
 
 
 def occupancy_grid_bytes(state: StateGrid) -> tuple[int, int]:
@@ -74,6 +83,8 @@ class RobotSender:
         self._sent_grid: tuple[tuple[slice, slice], NDArray[np.int8]] | None = None
         self._unconfirmed = False
         """The last message got no acknowledgement: the centre may hold it or not, so send the whole map."""
+        self._changed: Box | None = None
+        """Where the robot's :class:`OnBoardGrid` changed since the last acknowledged round (None: nowhere)."""
 
     def send(
         self, closed: StateGrid, round_: int, position_rc: tuple[int, int], window: tuple[slice, slice] | None = None
@@ -86,11 +97,39 @@ class RobotSender:
             window = (slice(0, closed.shape[0]), slice(0, closed.shape[1]))
         origin = (window[0].start, window[1].start)
         full = sparse_frontier_map(closed, self.robot, round_, position_rc, origin, self._acked.shape)
+        # The acknowledged map's cells lie in an earlier, smaller window: comparing in this one suffices.
+        return self._both(full, lambda: changed_since(self._acked, full, self._acked_round, window))
+
+    def note_changed(self, box: Box | None) -> None:
+        """The robot's :class:`OnBoardGrid` changed in ``box`` this round (what :meth:`OnBoardGrid.update`
+        returned); :meth:`send_onboard` compares only where it changed since the last acknowledgement."""
+        if box is not None:
+            self._changed = box_union(self._changed, box)
+
+    def send_onboard(
+        self, grid: OnBoardGrid, round_: int, position_rc: tuple[int, int], window: tuple[slice, slice]
+    ) -> tuple[bytes, bytes]:
+        """:meth:`send` from the robot's up-to-date :class:`OnBoardGrid` (same bytes), its codes reused and
+        the delta compared only where the grid changed since the last acknowledgement."""
+        origin, shape = (window[0].start, window[1].start), self._acked.shape
+        closed, codes = grid.closed[window], grid.codes[window]
+        full = coded_frontier_map(closed, codes, self.robot, round_, position_rc, origin, shape)
+        box = self._changed if self._changed is not None else _EMPTY
+        return self._both(full, lambda: changed_in_box(self._acked, grid.codes, full, self._acked_round, box))
+
+    def onboard_grid_delta_bytes(self, grid: OnBoardGrid) -> int:
+        """:meth:`grid_delta_bytes` of the robot's :class:`OnBoardGrid` state, compared only where it changed
+        since the last acknowledgement (same bytes)."""
+        box = self._changed if self._changed is not None else _EMPTY
+        rows, cols = slice(box[0], box[1]), slice(box[2], box[3])
+        return self.grid_delta_bytes(grid.state[rows, cols], (rows, cols))
+
+    def _both(self, full: SparseFrontierMap, delta: Callable[[], SparseFrontierMap]) -> tuple[bytes, bytes]:
+        """``(full, incremental)`` bytes: the delta where it is shorter and the centre surely holds its base."""
         full_bytes = encode(full)
         incremental = full_bytes
         if self._acked_round != FULL and not self._unconfirmed:
-            # The acknowledged map's cells lie in an earlier, smaller window: comparing in this one suffices.
-            delta_bytes = encode(changed_since(self._acked, full, self._acked_round, window))
+            delta_bytes = encode(delta())
             if len(delta_bytes) < len(full_bytes):
                 incremental = delta_bytes
         self._unconfirmed = True  # until the centre acknowledges this round
@@ -117,6 +156,7 @@ class RobotSender:
         np.put(self._acked, message.cells, message.codes)
         self._acked_round = message.round
         self._unconfirmed = False
+        self._changed = None  # the centre holds the grid as it is now
         if self._sent_grid is not None:
             window, ros = self._sent_grid
             self._acked_grid[window] = ros
@@ -211,10 +251,16 @@ class TeamLink:
         self._last_heard = np.full(n_robots, -1, dtype=np.int64)
         self._positions = np.full((n_robots, 2), -1, dtype=np.int32)
         self.status = LinkStatus(np.zeros(n_robots, bool), np.ones(n_robots, bool), self._positions.copy())
+        self.onboard = [OnBoardGrid(shape, preprocess.closing_size_cells, sensor) for _ in range(n_robots)]
+        """Each robot's own grid, closed and coded, kept up to date where its scans fell."""
+        self._free_count = np.zeros(shape, dtype=np.uint16)
+        """Per cell, how many robots' own grids hold it free (their union is what the IoU compares with)."""
         self.robot_ms = 0.0
-        """Milliseconds the last round spent on the robots' side (their closing and encoding, which run on
-        the robots in a real team, and the byte accounting), as opposed to the centre's decoding and
-        rebuilding."""
+        """Milliseconds the last round spent on the robots' side, all robots together: their grids' update,
+        closing, codes and messages, which run on board in a real team."""
+        self.accounting_ms = 0.0
+        """Milliseconds the last round spent on the episode's accounting: what the baselines would have sent
+        (:class:`TransmissionTotals`) and the IoU; neither a robot nor the centre does this work."""
 
     def restart_centre(self) -> None:
         """The centre loses everything it held: the robots' maps and bases, their cells, whom it heard."""
@@ -268,34 +314,37 @@ class TeamLink:
         """Run one round: every robot that can (``sending``, default all) sends, the centre rebuilds;
         returns the centre's ``(H, W) uint8`` grid and updates :attr:`status`."""
         r = self.totals.rounds
-        team_free = np.zeros(self.centre.shape, dtype=bool)
-        robot_s = 0.0
-        # A robot works on the box of its observed cells, grown by the closing's reach plus one cell: the
-        # closing, the codes and the seeds there equal those of the whole grid (nothing beyond is free).
+        robot_s = accounting_s = 0.0
+        # A robot's message covers the box of its observed cells, grown by the closing's reach plus one
+        # cell: the closing, the codes and the seeds there equal those of the whole grid (nothing beyond
+        # is free).
         margin = closing_reach(self.preprocess.closing_size_cells) + 1
         for i, belief in enumerate(beliefs):
             t0 = time.perf_counter()
-            window = belief.window(margin)
-            own = classify(belief.log_odds[window], belief.observed[window], self.sensor)
-            team_free[window] |= own == CellState.FREE
+            sender, grid = self.senders[i], self.onboard[i]
+            sender.note_changed(grid.update(belief, self._free_count))
             if sending is not None and not sending[i]:
                 robot_s += time.perf_counter() - t0
                 continue
-            closed = close_unknown_holes(own, self.preprocess.closing_size_cells)
+            window = belief.window(margin)
             pos = (int(positions_rc[i][0]), int(positions_rc[i][1]))
-            full_bytes, delta_bytes = self.senders[i].send(closed, r, pos, window)
-            raw, packed = occupancy_grid_bytes(own)
+            full_bytes, delta_bytes = sender.send_onboard(grid, r, pos, window)
+            t1 = time.perf_counter()
+            raw, packed = occupancy_grid_bytes(grid.state[window])
             self.totals.bytes_grid += raw
             self.totals.bytes_grid_zlib += packed
-            self.totals.bytes_grid_delta_zlib += self.senders[i].grid_delta_bytes(own, window)
+            self.totals.bytes_grid_delta_zlib += sender.onboard_grid_delta_bytes(grid)
             self.totals.bytes_sparse += len(full_bytes)
             self.totals.bytes_sparse_delta += len(delta_bytes)
-            robot_s += time.perf_counter() - t0
+            t2 = time.perf_counter()
+            robot_s += t1 - t0
+            accounting_s += t2 - t1
             self._deliver(i, delta_bytes if self.mode == "delta" else full_bytes, full_bytes)
         state = self.centre.state()
         t0 = time.perf_counter()
-        self.totals.iou.append(free_iou(state == CellState.FREE, team_free))
-        self.robot_ms = (robot_s + time.perf_counter() - t0) * 1e3  # the IoU is accounting too
+        self.totals.iou.append(free_iou(state == CellState.FREE, self._free_count > 0))
+        self.robot_ms = robot_s * 1e3
+        self.accounting_ms = (accounting_s + time.perf_counter() - t0) * 1e3
         heard = self._last_heard == r
         known = self._positions[:, 0] >= 0
         assignable = (r - self._last_heard < self.silence_rounds) & known

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import NDArray
 
-from mrexplore.boxes import Box, grown_slices
+from mrexplore.boxes import Box, box_union, grown_slices
 from mrexplore.config import SensorConfig
 from mrexplore.types import BoolGrid, CellState, StateGrid
 
@@ -37,6 +38,11 @@ class Belief:
     observed: BoolGrid
     box: Box | None = None
     """``(r0, r1, c0, c1)`` half-open rows and columns holding every observed cell; None: none observed."""
+    windows: NDArray[np.int32] = field(default_factory=lambda: np.zeros((0, 4), dtype=np.int32))
+    """``(n_scans, 4) int32`` the window of every noted scan, in order (a reader that keeps a copy of the
+    grid updates it where the scans since its last look fell: :meth:`changed_since`)."""
+    revision: int = 0
+    """Scans noted so far (the rows of :attr:`windows` in use)."""
 
     @classmethod
     def empty(cls, shape: tuple[int, int]) -> Belief:
@@ -47,12 +53,31 @@ class Belief:
         return classify(self.log_odds, self.observed, sensor)
 
     def note_window(self, window: Box) -> None:
-        """Grow :attr:`box` by a scan's window ``(r0, r1, c0, c1)``."""
+        """Record that a scan changed cells in ``window`` ``(r0, r1, c0, c1)`` only: grows :attr:`box` and
+        appends to :attr:`windows`. Whoever writes :attr:`log_odds` or :attr:`observed` must note it."""
         r0, r1, c0, c1 = window
-        if self.box is not None:
-            b0, b1, d0, d1 = self.box
-            r0, r1, c0, c1 = min(r0, b0), max(r1, b1), min(c0, d0), max(c1, d1)
-        self.box = (r0, r1, c0, c1)
+        if self.revision == len(self.windows):  # amortised growth: a mission notes a scan per step
+            grown = np.zeros((max(16, 2 * len(self.windows)), 4), dtype=np.int32)
+            grown[: self.revision] = self.windows
+            self.windows = grown
+        self.windows[self.revision] = window
+        self.revision += 1
+        self.box = box_union(self.box, (r0, r1, c0, c1))
+
+    def changed_since(self, revision: int) -> Box | None:
+        """The box of the scans noted after ``revision`` (a value of :attr:`revision`); None: none since.
+
+        Examples
+        --------
+        >>> b = Belief.empty((10, 10)); b.note_window((4, 6, 2, 3)); seen = b.revision
+        >>> b.note_window((1, 2, 5, 9)); b.note_window((3, 4, 4, 5))
+        >>> b.changed_since(seen), b.changed_since(b.revision)
+        ((1, 4, 4, 9), None)
+        """
+        if revision >= self.revision:
+            return None
+        w = self.windows[revision : self.revision]
+        return int(w[:, 0].min()), int(w[:, 1].max()), int(w[:, 2].min()), int(w[:, 3].max())
 
     def window(self, margin: int) -> tuple[slice, slice]:
         """:attr:`box` grown by ``margin`` cells and clipped to the grid (the whole grid when unknown).

@@ -1,0 +1,104 @@
+"""A robot's on-board copy of its grid, closed and coded, kept up to date where its scans fell.
+
+Each round a robot sends the sparse frontier map of its closed grid. Recomputing the three-state view,
+the closing and the neighbour codes over every cell it knows costs in proportion to what it has seen
+(about a million cells per robot late on a KTH floor at 0.05 m); a scan changes a few thousand. So the
+robot keeps the three grids over the whole map and redoes them only in the box of the scans since its
+last round, grown by how far each step reads: the closing reads free cells up to
+:func:`~mrexplore.preprocessing.frontiers.closing_reach` away, a code its four neighbours. The result is
+cell for cell what the whole computation gives (tested against it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mrexplore.boxes import Box, box_union, grown_slices
+from mrexplore.config import SensorConfig
+from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
+from mrexplore.preprocessing.sparse_map import neighbour_codes
+from mrexplore.sim.belief import Belief, classify
+from mrexplore.types import CellState, StateGrid
+
+__all__ = ["OnBoardGrid"]
+
+
+class OnBoardGrid:
+    """One robot's three-state grid, its closing and the closing's neighbour codes, all ``(H, W) uint8``.
+
+    :meth:`update` brings them in line with the robot's :class:`~mrexplore.sim.belief.Belief`, working
+    only where the belief noted scans since the last update; a belief it has not seen before (another
+    object) is read whole.
+
+    Examples
+    --------
+    >>> b = Belief.empty((6, 6)); b.observed[1:5, 1:5] = True; b.note_window((1, 5, 1, 5))
+    >>> g = OnBoardGrid((6, 6), closing_size_cells=1, sensor=SensorConfig())
+    >>> g.update(b)
+    (0, 6, 0, 6)
+    >>> int((g.state == CellState.FREE).sum()), int((g.codes > 0).sum())
+    (16, 12)
+    >>> g.update(b) is None  # no scan since
+    True
+    """
+
+    def __init__(self, shape: tuple[int, int], closing_size_cells: int, sensor: SensorConfig) -> None:
+        self.closing_size_cells = closing_size_cells
+        self.sensor = sensor
+        self.state: StateGrid = np.full(shape, CellState.UNKNOWN, dtype=np.uint8)
+        self.closed: StateGrid = self.state.copy()
+        self.codes: NDArray[np.uint8] = np.zeros(shape, dtype=np.uint8)
+        self._belief: Belief | None = None
+        self._revision = 0
+
+    def update(self, belief: Belief, free_count: NDArray[np.uint16] | None = None) -> Box | None:
+        """Bring the grids in line with ``belief``; returns the box where :attr:`closed` and :attr:`codes`
+        may have changed (None: nowhere). ``free_count`` ``(H, W) uint16``, if given, counts per cell the
+        robots whose :attr:`state` is free: this robot's changes are applied to it."""
+        if belief is not self._belief:
+            changed = belief.box
+            if self._belief is not None and self._belief.box is not None:
+                changed = box_union(changed, self._belief.box)  # cells the other belief knew are forgotten
+        else:
+            changed = belief.changed_since(self._revision)
+        self._belief, self._revision = belief, belief.revision
+        if changed is None:
+            return None
+        shape = self.state.shape
+        rows, cols = _slices(changed)
+        own = classify(belief.log_odds[rows, cols], belief.observed[rows, cols], self.sensor)
+        if free_count is not None:
+            was = self.state[rows, cols] == CellState.FREE
+            now = own == CellState.FREE
+            free_count[rows, cols] += now & ~was
+            free_count[rows, cols] -= was & ~now
+        self.state[rows, cols] = own
+        # A cell's closing reads free cells up to the reach away: recompute it within the reach of the
+        # change, from the cells within the reach of that. A code reads the four neighbours: the same, one
+        # cell further. (Beyond the grid counts as it does for the whole grid; a cut side is far enough.)
+        reach = closing_reach(self.closing_size_cells)
+        closed_box = _grown(changed, reach, shape)
+        read = _slices(_grown(closed_box, reach, shape))
+        self.closed[_slices(closed_box)] = close_unknown_holes(self.state[read], self.closing_size_cells)[
+            _within(closed_box, read)
+        ]
+        coded_box = _grown(closed_box, 1, shape)
+        read = _slices(_grown(coded_box, 1, shape))
+        self.codes[_slices(coded_box)] = neighbour_codes(self.closed[read])[_within(coded_box, read)]
+        return coded_box
+
+
+def _grown(box: Box, margin: int, shape: tuple[int, int]) -> Box:
+    rows, cols = grown_slices(box, margin, shape)
+    return rows.start, rows.stop, cols.start, cols.stop
+
+
+def _slices(box: Box) -> tuple[slice, slice]:
+    return slice(box[0], box[1]), slice(box[2], box[3])
+
+
+def _within(box: Box, outer: tuple[slice, slice]) -> tuple[slice, slice]:
+    """``box`` (inside ``outer``) in the coordinates of an array cut to ``outer``."""
+    r, c = outer[0].start, outer[1].start
+    return slice(box[0] - r, box[1] - r), slice(box[2] - c, box[3] - c)

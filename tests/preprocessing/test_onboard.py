@@ -1,0 +1,108 @@
+"""A robot's on-board grid kept up to date where its scans fell equals the whole computation, and the
+messages and byte counts built from it equal those built from the whole closed grid."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mrexplore.config import SensorConfig
+from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
+from mrexplore.preprocessing.onboard import OnBoardGrid
+from mrexplore.preprocessing.sparse_codec import decode
+from mrexplore.preprocessing.sparse_map import neighbour_codes
+from mrexplore.preprocessing.transmission import RobotSender
+from mrexplore.sim.belief import Belief, classify
+from mrexplore.types import CellState
+
+SENSOR = SensorConfig()
+
+
+def _scan(belief: Belief, truth: np.ndarray, rng: np.random.Generator) -> None:
+    """A scan-like change: a random box of the map observed, its log-odds nudged towards the truth (with
+    some cells read wrong, so cells turn from free to occupied and back), noted as the world notes it."""
+    H, W = truth.shape
+    r0, c0 = int(rng.integers(0, H)), int(rng.integers(0, W))
+    r1, c1 = min(H, r0 + int(rng.integers(1, 9))), min(W, c0 + int(rng.integers(1, 9)))
+    box = (slice(r0, r1), slice(c0, c1))
+    seen = rng.random((r1 - r0, c1 - c0)) < 0.8  # gaps between beams
+    wrong = rng.random(seen.shape) < 0.1
+    hit = truth[box] ^ wrong
+    belief.log_odds[box] += np.where(seen, np.where(hit, 0.9, -0.4), 0.0).astype(np.float32)
+    belief.observed[box] |= seen
+    belief.note_window((r0, r1, c0, c1))
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10**6), st.sampled_from([1, 3, 5]))
+def test_updated_where_the_scans_fell_equals_the_whole_grid(seed: int, size: int) -> None:
+    rng = np.random.default_rng(seed)
+    shape = (int(rng.integers(6, 40)), int(rng.integers(6, 40)))
+    truth = rng.random(shape) < 0.25
+    beliefs = [Belief.empty(shape) for _ in range(2)]
+    grids = [OnBoardGrid(shape, size, SENSOR) for _ in beliefs]
+    free_count = np.zeros(shape, dtype=np.uint16)
+    for _ in range(6):
+        for belief, grid in zip(beliefs, grids, strict=True):
+            for _ in range(int(rng.integers(0, 3))):
+                _scan(belief, truth, rng)
+            before = grid.codes.copy(), grid.closed.copy()
+            changed = grid.update(belief, free_count)
+            state = classify(belief.log_odds, belief.observed, SENSOR)
+            closed = close_unknown_holes(state, size)
+            assert np.array_equal(grid.state, state)
+            assert np.array_equal(grid.closed, closed)
+            assert np.array_equal(grid.codes, neighbour_codes(closed))
+            # Nothing changed outside the box it returns.
+            outside = np.ones(shape, dtype=bool)
+            if changed is not None:
+                outside[changed[0] : changed[1], changed[2] : changed[3]] = False
+            assert np.array_equal(before[0][outside], grid.codes[outside])
+            assert np.array_equal(before[1][outside], grid.closed[outside])
+        free = sum((g.state == CellState.FREE).astype(int) for g in grids)
+        assert np.array_equal(free_count, free)
+
+
+def test_another_belief_is_read_whole_and_forgets_the_last() -> None:
+    shape = (8, 8)
+    first, second = Belief.empty(shape), Belief.empty(shape)
+    first.observed[0:3, 0:3] = True
+    first.note_window((0, 3, 0, 3))
+    second.observed[5:8, 5:8] = True
+    second.note_window((5, 8, 5, 8))
+    grid = OnBoardGrid(shape, 1, SENSOR)
+    grid.update(first)
+    assert grid.update(second) == (0, 8, 0, 8)
+    assert np.array_equal(grid.state, classify(second.log_odds, second.observed, SENSOR))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10**6))
+def test_onboard_messages_equal_those_of_the_whole_closed_grid(seed: int) -> None:
+    # Two senders of the same robot, one from its whole closed grid (send), one from the on-board grid
+    # (send_onboard); acknowledgements lost at random, so deltas span several rounds of change.
+    rng = np.random.default_rng(seed)
+    shape = (int(rng.integers(8, 36)), int(rng.integers(8, 36)))
+    truth = rng.random(shape) < 0.2
+    size = 3
+    belief = Belief.empty(shape)
+    grid = OnBoardGrid(shape, size, SENSOR)
+    whole, onboard = RobotSender(0, shape), RobotSender(0, shape)
+    everywhere = (slice(0, shape[0]), slice(0, shape[1]))
+    for rnd in range(8):
+        for _ in range(int(rng.integers(0, 4))):
+            _scan(belief, truth, rng)
+        onboard.note_changed(grid.update(belief))
+        if belief.box is None:
+            continue
+        window = belief.window(closing_reach(size) + 1)
+        r0, r1, c0, c1 = belief.box  # the robot stands where it has scanned
+        pos = (int(rng.integers(r0, r1)), int(rng.integers(c0, c1)))
+        own = classify(belief.log_odds, belief.observed, SENSOR)
+        expected = whole.send(close_unknown_holes(own, size), rnd, pos)
+        assert onboard.send_onboard(grid, rnd, pos, window) == expected
+        assert onboard.onboard_grid_delta_bytes(grid) == whole.grid_delta_bytes(own, everywhere)
+        if rng.random() < 0.7:  # acknowledged
+            whole.acknowledged(decode(expected[1]))
+            onboard.acknowledged(decode(expected[1]))
