@@ -31,7 +31,7 @@ MAPS = (
     str(SHARED / "houseexpo" / "png" / "00922f91aa09dbdda3a74489ea0e21eb.png"),
 )
 STRATEGIES = ("coscan", "oracle", "utility", "hier")
-TIMINGS = ("wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb")
+TIMINGS = ("wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb", "onboard_ms_median", "onboard_ms_p95")
 
 
 def _missions(with_faults: bool) -> dict[str, MissionConfig]:

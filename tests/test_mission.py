@@ -17,7 +17,7 @@ from mrexplore.preprocessing.frontiers import Frontiers
 from mrexplore.strategies import _denoised_un, make_strategy
 from mrexplore.types import MrExploreError
 
-TIMING_KEYS = {"wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb"}
+TIMING_KEYS = {"wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb", "onboard_ms_median", "onboard_ms_p95"}
 
 
 @pytest.fixture(scope="module")
@@ -33,6 +33,7 @@ def test_mission_explores_the_map(small_map, strategy: str) -> None:
     assert 0 < m.lower_bound_steps <= m.steps
     assert m.steps_to_90 is not None and m.steps_to_90 <= m.steps
     assert m.path_len_max_m <= m.path_len_sum_m and m.decisions >= 1
+    assert 0 < m.onboard_ms_median <= m.onboard_ms_p95  # every round's on-board work was timed
 
 
 def test_same_seed_same_result_other_seed_other_result(small_map) -> None:

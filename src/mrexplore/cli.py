@@ -497,6 +497,8 @@ def _summary(rec: dict[str, Any]) -> str:
             f"overlap {rec['overlap']:.2f}",
             f"  {rec['decisions']} decisions, {rec['plan_ms_mean']:.1f} ms mean, {rec['plan_ms_p95']:.1f} ms p95; "
             f"wall {rec['wall_s']:.1f} s; peak memory {rec['peak_mb']:.0f} MB; ended: {rec['done_reason']}",
+            f"  a robot's on-board work a round: {rec['onboard_ms_median']:.1f} ms median, "
+            f"{rec['onboard_ms_p95']:.1f} ms p95",
             f"  sent over {rec['rounds']} rounds: sparse {_kb(rec['bytes_sparse'])}, delta "
             f"{_kb(rec['bytes_sparse_delta'])}; grid {_kb(rec['bytes_grid'])}, zlib {_kb(rec['bytes_grid_zlib'])}; "
             f"centre map IoU min {rec['reconstruction_iou_min']:.4f}",

@@ -149,6 +149,8 @@ class Mission:
         self.blacklist = np.zeros(truth.shape, dtype=bool)
         self.curve = [sim.coverage]
         self.plan_ms: list[float] = []
+        self.onboard_ms: list[float] = []
+        """Each robot's on-board work in each round it sent a map, ms (see :class:`TeamLink`)."""
         self.last_decision_step = -mission_cfg.replan_every_steps
         self.decision: Decision | None = None
         # Every strategy plans on the grid the centre rebuilds from the robots' sparse frontier maps (IV-A).
@@ -414,6 +416,7 @@ class Mission:
             link.restart_centre()
             self.blacklist = np.zeros(self.truth.shape, dtype=bool)  # the centre's memory too
         self.state = link.exchange(sim.beliefs, sim.positions_rc, sim.alive & self._in_range())
+        self.onboard_ms.extend(link.robot_ms_each)
         self._active = np.flatnonzero(link.status.assignable)
         current = self._current()
         return t, (
@@ -552,6 +555,7 @@ class Mission:
             lower_bound_steps(~truth.occupied, sim.explorable, self.starts_rc, truth.resolution_m, self.sim_cfg),
             int((~sim.alive).sum()),
             peak_mb(),
+            self.onboard_ms,
         )
         return MissionResult(measures, np.asarray(self.curve), self.starts_rc.copy(), self.state, sim)
 

@@ -258,6 +258,8 @@ class TeamLink:
         self.robot_ms = 0.0
         """Milliseconds the last round spent on the robots' side, all robots together: their grids' update,
         closing, codes and messages, which run on board in a real team."""
+        self.robot_ms_each: list[float] = []
+        """Milliseconds of on-board work of each robot that sent a map in the last round."""
         self.accounting_ms = 0.0
         """Milliseconds the last round spent on the episode's accounting: what the baselines would have sent
         (:class:`TransmissionTotals`) and the IoU; neither a robot nor the centre does this work."""
@@ -315,6 +317,7 @@ class TeamLink:
         returns the centre's ``(H, W) uint8`` grid and updates :attr:`status`."""
         r = self.totals.rounds
         robot_s = accounting_s = 0.0
+        self.robot_ms_each = []
         # A robot's message covers the box of its observed cells, grown by the closing's reach plus one
         # cell: the closing, the codes and the seeds there equal those of the whole grid (nothing beyond
         # is free).
@@ -339,6 +342,7 @@ class TeamLink:
             t2 = time.perf_counter()
             robot_s += t1 - t0
             accounting_s += t2 - t1
+            self.robot_ms_each.append((t1 - t0) * 1e3)
             self._deliver(i, delta_bytes if self.mode == "delta" else full_bytes, full_bytes)
         state = self.centre.state()
         t0 = time.perf_counter()

@@ -117,6 +117,10 @@ class EpisodeMeasures:
     """Steps no planner could beat from these starts (see :func:`lower_bound_steps`)."""
     peak_mb: float = 0.0
     """Peak resident memory of the process during the mission, MB (see :mod:`mrexplore.memory`)."""
+    onboard_ms_median: float = 0.0
+    """One robot's on-board work in a round (its grid brought up to date, closed and coded, its messages
+    built), ms: the median over the robots and rounds that sent a map."""
+    onboard_ms_p95: float = 0.0
 
     @classmethod
     def from_run(
@@ -131,12 +135,14 @@ class EpisodeMeasures:
         lower_bound: int = 0,
         robots_failed: int = 0,
         peak_mb: float = 0.0,
+        onboard_ms: list[float] | None = None,
     ) -> EpisodeMeasures:
         """Measures of a finished run; ``transmission`` holds the byte and IoU fields (see
         :meth:`~mrexplore.preprocessing.transmission.TransmissionTotals.as_measures`)."""
         team = float(curve[-1])
         s90, s95, s99 = (steps_to_coverage(curve, lv) for lv in COVERAGE_MILESTONES)
         ms = np.asarray(plan_ms, dtype=np.float64)
+        robot = np.asarray(onboard_ms or [], dtype=np.float64)
         return cls(
             steps=len(curve) - 1,
             coverage=round(team, 6),
@@ -155,6 +161,8 @@ class EpisodeMeasures:
             lower_bound_steps=lower_bound,
             robots_failed=robots_failed,
             peak_mb=round(peak_mb, 1),
+            onboard_ms_median=round(float(np.median(robot)), 3) if len(robot) else 0.0,
+            onboard_ms_p95=round(float(np.percentile(robot, 95)), 3) if len(robot) else 0.0,
         )
 
     def to_dict(self) -> dict[str, Any]:

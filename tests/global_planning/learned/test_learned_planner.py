@@ -21,7 +21,7 @@ from mrexplore.preprocessing.clustering import Clusters
 from mrexplore.strategies import make_strategy
 from mrexplore.types import MrExploreError
 
-TIMING = {"wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb"}
+TIMING = {"wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb", "onboard_ms_median", "onboard_ms_p95"}
 
 
 def _untrained() -> MultiGraphNet:
