@@ -104,6 +104,20 @@ def test_far_distances_on_a_large_map_decide_a_corridor_as_exact_ones_do() -> No
     assert d_far.paths[1].tolist() == [[2, c] for c in range(30, 40)]
 
 
+def test_routes_on_threads_give_the_mission_inline_routes_give(small_map, monkeypatch) -> None:
+    # Large grids route their robots on the threads; forced on this small one, with two threads and the
+    # router's memo shared between them, every record but the timings stays as it is inline.
+    import mrexplore.strategies as strategies
+
+    monkeypatch.setenv("MREXPLORE_THREADS", "2")
+    runs = []
+    for cells in (10**12, 0):
+        monkeypatch.setattr(strategies, "_THREADED_ROUTES_CELLS", cells)
+        runs.append(run_mission(small_map, make_strategy("hier"), SimConfig(robots=4), seed=3).measures.to_dict())
+    inline, threaded = ({k: v for k, v in r.items() if k not in TIMING_KEYS} for r in runs)
+    assert threaded == inline
+
+
 @pytest.mark.parametrize(("commitment", "goal"), [(1.0, [2, 7]), (0.4, [2, 1])])
 def test_commitment_keeps_a_robot_on_its_goal(commitment: float, goal: list[int]) -> None:
     # The robot at (2, 5) heads for the left end (4 cells away); the right end is 2 cells away.

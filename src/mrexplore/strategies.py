@@ -24,6 +24,7 @@ from mrexplore.paths.distance_field import Field, distance_fields, distance_matr
 from mrexplore.paths.far_field import NearFarField, far_fields, path_to
 from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers, split_for_team
 from mrexplore.preprocessing.frontiers import Frontiers, detect_frontiers
+from mrexplore.threads import map_threads
 from mrexplore.types import BoolGrid, CellState, MrExploreError, StateGrid
 
 __all__ = [
@@ -374,10 +375,15 @@ class ExplorationPipeline:
         if posed.problem is None or posed.work is None:
             raise MrExploreError("finish() needs a posed decision with a problem; an ended one is already final")
         p, w = posed.problem, posed.work
-        routes = [
-            _NO_ROUTE if k == UNASSIGNED else self.route(i, int(k), p, w)
-            for i, k in enumerate(assignment.cluster_of_robot)
-        ]
+
+        def route(ik: tuple[int, int]) -> NDArray[np.int32]:
+            i, k = ik
+            return _NO_ROUTE if k == UNASSIGNED else self.route(i, k, p, w)
+
+        # Each robot's route is its own search (the distance kernels release the GIL): on the threads where
+        # the map is large enough for its searches to outweigh handing them over.
+        items = [(i, int(k)) for i, k in enumerate(assignment.cluster_of_robot)]
+        routes = map_threads(route, items) if w.passable.size >= _THREADED_ROUTES_CELLS else [route(x) for x in items]
         return _decision(p.state, w.frontiers, p.clusters, assignment, routes, w.fields, w.passable, p.robots_rc)
 
     def decide(
@@ -541,6 +547,10 @@ class OraclePipeline(ExplorationPipeline):
         """The robot's own route, in its order."""
         return problem.clusters.members_of(k)
 
+
+_THREADED_ROUTES_CELLS = 2_000_000
+"""Grids from which :meth:`ExplorationPipeline.finish` routes the robots on the threads (the KTH floors at
+0.05 m: late in a 16-robot mission their local routes took 122 ms a decision on one thread)."""
 
 CENTRE_COMMITMENT = 0.5
 """Default hysteresis of strategies whose goal is a cluster centre (measured on 6 maps x 2 seeds: utility

@@ -8,6 +8,7 @@ in its workers' environment and every map below runs inline.
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import TypeVar
@@ -20,6 +21,7 @@ THREADS_ENV = "MREXPLORE_THREADS"
 _T = TypeVar("_T")
 _R = TypeVar("_R")
 _pool: ThreadPoolExecutor | None = None
+_PREFIX = "mrexplore-pool"
 
 
 def thread_count() -> int:
@@ -37,7 +39,8 @@ def thread_count() -> int:
 
 
 def map_threads(fn: Callable[[_T], _R], items: Sequence[_T]) -> list[_R]:
-    """``[fn(x) for x in items]``, on the shared pool when more than one thread is allowed.
+    """``[fn(x) for x in items]``, on the shared pool when more than one thread is allowed (inline when
+    called from one of the pool's own threads: waiting there on the pool could leave no thread to run).
 
     Examples
     --------
@@ -46,8 +49,8 @@ def map_threads(fn: Callable[[_T], _R], items: Sequence[_T]) -> list[_R]:
     """
     global _pool
     n = thread_count()
-    if n <= 1 or len(items) < 2:
+    if n <= 1 or len(items) < 2 or threading.current_thread().name.startswith(_PREFIX):
         return [fn(x) for x in items]
     if _pool is None or _pool._max_workers != n:  # noqa: SLF001 - resize when the setting changed
-        _pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix="mrexplore")
+        _pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix=_PREFIX)
     return list(_pool.map(fn, items))

@@ -54,6 +54,8 @@ def test_updated_where_the_scans_fell_equals_the_whole_grid(seed: int, size: int
             assert np.array_equal(grid.state, state)
             assert np.array_equal(grid.closed, closed)
             assert np.array_equal(grid.codes, neighbour_codes(closed))
+            assert np.array_equal(grid.cells, np.flatnonzero(grid.codes.ravel()))
+            assert grid.n_free == np.count_nonzero(closed == CellState.FREE)
             # Nothing changed outside the box it returns.
             outside = np.ones(shape, dtype=bool)
             if changed is not None:
@@ -106,3 +108,20 @@ def test_onboard_messages_equal_those_of_the_whole_closed_grid(seed: int) -> Non
         if rng.random() < 0.7:  # acknowledged
             whole.acknowledged(decode(expected[1]))
             onboard.acknowledged(decode(expected[1]))
+
+
+def test_state_version_moves_only_when_the_three_state_grid_changes() -> None:
+    belief = Belief.empty((5, 5))
+    grid = OnBoardGrid((5, 5), 1, SENSOR)
+    belief.observed[1:3, 1:3] = True
+    belief.note_window((1, 3, 1, 3))
+    grid.update(belief)
+    assert grid.state_version == 1
+    belief.log_odds[1, 1] -= 0.4  # more sure it is free: the same state
+    belief.note_window((1, 2, 1, 2))
+    grid.update(belief)
+    assert grid.state_version == 1
+    belief.log_odds[1, 1] += 5.0  # now occupied
+    belief.note_window((1, 2, 1, 2))
+    grid.update(belief)
+    assert grid.state_version == 2 and grid.state[1, 1] == CellState.OCCUPIED

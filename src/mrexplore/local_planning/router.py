@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import threading
 from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -145,13 +146,25 @@ class _Memo:
     def __init__(self, size: int = 64) -> None:
         self.size = size
         self._items: OrderedDict[object, Any] = OrderedDict()
+        self._lock = threading.Lock()
+        """Robots' routes are searched on several threads; the values are pure, so a key computed twice
+        at once only costs time."""
 
     def get(self, key: object, compute: Callable[[], _V]) -> _V:
-        if key in self._items:
-            self._items.move_to_end(key)
-            return self._items[key]
+        with self._lock:
+            if key in self._items:
+                self._items.move_to_end(key)
+                return self._items[key]
         value = compute()
-        self._items[key] = value
-        if len(self._items) > self.size:
-            self._items.popitem(last=False)
+        with self._lock:
+            self._items[key] = value
+            if len(self._items) > self.size:
+                self._items.popitem(last=False)
         return value
+
+    def __getstate__(self) -> dict[str, Any]:  # a lock neither pickles nor deep-copies
+        return {"size": self.size, "_items": self._items}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._lock = threading.Lock()

@@ -11,6 +11,7 @@ cell for cell what the whole computation gives (tested against it).
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
@@ -49,6 +50,13 @@ class OnBoardGrid:
         self.state: StateGrid = np.full(shape, CellState.UNKNOWN, dtype=np.uint8)
         self.closed: StateGrid = self.state.copy()
         self.codes: NDArray[np.uint8] = np.zeros(shape, dtype=np.uint8)
+        self.cells: NDArray[np.int64] = np.zeros(0, dtype=np.int64)
+        """``(n,) int64`` row-major indices of the cells with a code, increasing (a message lists them)."""
+        self.n_free = 0
+        """Free cells of :attr:`closed`."""
+        self.state_version = 0
+        """Counts the updates that changed :attr:`state` (whatever reads it whole may keep its result until
+        this moves)."""
         self._belief: Belief | None = None
         self._revision = 0
 
@@ -73,6 +81,8 @@ class OnBoardGrid:
             now = own == CellState.FREE
             free_count[rows, cols] += now & ~was
             free_count[rows, cols] -= was & ~now
+        if not np.array_equal(self.state[rows, cols], own):
+            self.state_version += 1
         self.state[rows, cols] = own
         # A cell's closing reads free cells up to the reach away: recompute it within the reach of the
         # change, from the cells within the reach of that. A code reads the four neighbours: the same, one
@@ -80,12 +90,14 @@ class OnBoardGrid:
         reach = closing_reach(self.closing_size_cells)
         closed_box = _grown(changed, reach, shape)
         read = _slices(_grown(closed_box, reach, shape))
-        self.closed[_slices(closed_box)] = close_unknown_holes(self.state[read], self.closing_size_cells)[
-            _within(closed_box, read)
-        ]
+        closed = close_unknown_holes(self.state[read], self.closing_size_cells)[_within(closed_box, read)]
+        target = self.closed[_slices(closed_box)]
+        self.n_free += int(np.count_nonzero(closed == CellState.FREE)) - int(np.count_nonzero(target == CellState.FREE))
+        target[...] = closed
         coded_box = _grown(closed_box, 1, shape)
         read = _slices(_grown(coded_box, 1, shape))
         self.codes[_slices(coded_box)] = neighbour_codes(self.closed[read])[_within(coded_box, read)]
+        self.cells = _spliced(self.cells, self.codes, coded_box)
         return coded_box
 
 
@@ -102,3 +114,44 @@ def _within(box: Box, outer: tuple[slice, slice]) -> tuple[slice, slice]:
     """``box`` (inside ``outer``) in the coordinates of an array cut to ``outer``."""
     r, c = outer[0].start, outer[1].start
     return slice(box[0] - r, box[1] - r), slice(box[2] - c, box[3] - c)
+
+
+@nb.njit(cache=True)
+def _spliced(cells: np.ndarray, codes: np.ndarray, box: Box) -> np.ndarray:  # pragma: no cover - numba
+    """``cells`` (increasing row-major indices of coded cells) with those inside ``box`` replaced by the
+    cells of ``box`` that have a code in ``codes`` now; still increasing (a merge of the two lists)."""
+    W = codes.shape[1]
+    r0, r1, c0, c1 = box
+    n_new = 0
+    for r in range(r0, r1):
+        for c in range(c0, c1):
+            if codes[r, c] != 0:
+                n_new += 1
+    n_kept = 0
+    for k in range(len(cells)):
+        r, c = cells[k] // W, cells[k] % W
+        if not (r0 <= r < r1 and c0 <= c < c1):
+            n_kept += 1
+    out = np.empty(n_kept + n_new, dtype=np.int64)
+    j = 0
+    o = 0
+    for r in range(r0, r1):
+        for c in range(c0, c1):
+            if codes[r, c] == 0:
+                continue
+            cell = r * W + c
+            while j < len(cells) and cells[j] < cell:
+                rr, cc = cells[j] // W, cells[j] % W
+                if not (r0 <= rr < r1 and c0 <= cc < c1):
+                    out[o] = cells[j]
+                    o += 1
+                j += 1
+            out[o] = cell
+            o += 1
+    while j < len(cells):
+        rr, cc = cells[j] // W, cells[j] % W
+        if not (r0 <= rr < r1 and c0 <= cc < c1):
+            out[o] = cells[j]
+            o += 1
+        j += 1
+    return out

@@ -18,14 +18,15 @@ _UP_MASK, _DOWN_MASK, _LEFT_MASK, _RIGHT_MASK = 0x11, 0x22, 0x44, 0x88
 
 
 @nb.njit(cache=True, nogil=True)
-def scanline_fill(codes: np.ndarray, seeds: np.ndarray, filled: np.ndarray) -> None:  # pragma: no cover - numba
+def scanline_fill(codes: np.ndarray, seeds: np.ndarray, filled: np.ndarray) -> int:  # pragma: no cover - numba
     """Scan-line flood fill into ``filled`` from ``seeds`` (row-major indices): a move out of a cell is allowed
-    towards every side its neighbour code does not flag.
+    towards every side its neighbour code does not flag. Returns the number of cells it filled.
 
     The stack is a typed list of cells: an array stack that grew by reallocation (an array variable
     reassigned in the loop) ran 8x slower on the same fills, apparently because numba then left the inner
     loops unoptimised."""
     H, W = filled.shape
+    count = 0
     stack = [(0, 0) for _ in range(0)]  # an empty typed list of cells
     for s in seeds:
         stack.append((s // W, s % W))
@@ -41,6 +42,7 @@ def scanline_fill(codes: np.ndarray, seeds: np.ndarray, filled: np.ndarray) -> N
             hi += 1
         for x in range(lo, hi + 1):
             filled[r, x] = True
+        count += hi - lo + 1
         for k in range(2):
             rr = r - 1 if k == 0 else r + 1
             if rr < 0 or rr >= H:
@@ -52,20 +54,23 @@ def scanline_fill(codes: np.ndarray, seeds: np.ndarray, filled: np.ndarray) -> N
                 if ok and not in_run:  # one seed per run of open cells in the next row
                     stack.append((rr, x))
                 in_run = ok
+    return count
 
 
 @nb.njit(cache=True)
-def pick_seeds(codes: np.ndarray, state: np.ndarray, position: int) -> np.ndarray:  # pragma: no cover - numba
+def pick_seeds(codes: np.ndarray, state: np.ndarray, position: int, n_free: int) -> np.ndarray:  # pragma: no cover
     """Row-major indices of the fewest seeds from which :func:`scanline_fill` with ``codes`` reaches every
     free cell of the CellState grid ``state``: the robot's cell (``position``, if free) first, then the
     first interior cell (code 0) not yet reached, repeatedly. Cells with a code are in the message anyway;
-    a component made only of them needs no seed."""
+    a component made only of them needs no seed. ``n_free``: the free cells of ``state`` where the caller
+    knows them (-1: not known); when the robot's own fill reaches that many, no other component is sought."""
     H, W = codes.shape
     filled = np.zeros((H, W), dtype=np.bool_)
     out = []
-    if state[position // W, position % W] == _FREE:
+    if 0 <= position < H * W and state[position // W, position % W] == _FREE:
         out.append(position)
-        scanline_fill(codes, np.array([position], dtype=np.int64), filled)
+        if scanline_fill(codes, np.array([position], dtype=np.int64), filled) == n_free:
+            return np.array([position], dtype=np.int64)
     for r in range(H):
         for c in range(W):
             if state[r, c] == _FREE and codes[r, c] == 0 and not filled[r, c]:

@@ -111,12 +111,18 @@ def neighbour_codes(state: StateGrid) -> NDArray[np.uint8]:
     return neighbour_codes_kernel(np.ascontiguousarray(state, dtype=np.uint8))
 
 
-def component_seeds(state: StateGrid, codes: NDArray[np.uint8], position_rc: GridRC) -> NDArray[np.int64]:
+def component_seeds(
+    state: StateGrid, codes: NDArray[np.uint8], position_rc: GridRC, n_free: int | None = None
+) -> NDArray[np.int64]:
     """One seed per 4-connected free component of ``state`` that has an interior cell (code 0): the
     robot's cell for its own component, the first interior cell in row-major order for the others,
-    sorted. Components made of boundary cells only need none: every one of their cells is in the message."""
+    sorted. Components made of boundary cells only need none: every one of their cells is in the message.
+    ``n_free``: the number of free cells of ``state``, where the caller keeps it (saves a pass when the
+    robot's component holds them all)."""
     r, c = position_rc
-    return np.sort(pick_seeds(codes, state, r * state.shape[1] + c))
+    inside = 0 <= r < state.shape[0] and 0 <= c < state.shape[1]
+    position = r * state.shape[1] + c if inside else -1
+    return np.sort(pick_seeds(codes, state, position, -1 if n_free is None else n_free))
 
 
 def sparse_frontier_map(
@@ -161,14 +167,20 @@ def coded_frontier_map(
     position_rc: GridRC,
     origin_rc: GridRC = (0, 0),
     shape: tuple[int, int] | None = None,
+    cells: NDArray[np.int64] | None = None,
+    n_free: int | None = None,
 ) -> SparseFrontierMap:
     """:func:`sparse_frontier_map` from a grid whose neighbour codes (``(h, w) uint8``, those of
-    :func:`neighbour_codes` on the whole map, cut to the window) the robot already holds."""
+    :func:`neighbour_codes` on the whole map, cut to the window) the robot already holds; ``cells``, the
+    map indices of the cells with a code (sorted), and ``n_free``, the free cells, where it keeps them."""
     shape = state.shape if shape is None else shape
     r0, c0 = origin_rc
     r, c = int(position_rc[0]), int(position_rc[1])
-    cells, values = coded_cells(codes, r0, c0, shape[1])
-    seeds = component_seeds(state, codes, (r - r0, c - c0))
+    if cells is None:
+        cells, values = coded_cells(codes, r0, c0, shape[1])
+    else:
+        values = codes[cells // shape[1] - r0, cells % shape[1] - c0]
+    seeds = component_seeds(state, codes, (r - r0, c - c0), n_free)
     return SparseFrontierMap(
         robot, round_, shape, (r, c), cells, values, _to_map(seeds, state.shape[1], r0, c0, shape[1])
     )

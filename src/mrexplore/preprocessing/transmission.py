@@ -113,7 +113,9 @@ class RobotSender:
         the delta compared only where the grid changed since the last acknowledgement."""
         origin, shape = (window[0].start, window[1].start), self._acked.shape
         closed, codes = grid.closed[window], grid.codes[window]
-        full = coded_frontier_map(closed, codes, self.robot, round_, position_rc, origin, shape)
+        full = coded_frontier_map(
+            closed, codes, self.robot, round_, position_rc, origin, shape, grid.cells, grid.n_free
+        )
         box = self._changed if self._changed is not None else _EMPTY
         return self._both(full, lambda: changed_in_box(self._acked, grid.codes, full, self._acked_round, box))
 
@@ -254,6 +256,9 @@ class TeamLink:
         self.onboard = [OnBoardGrid(shape, preprocess.closing_size_cells, sensor) for _ in range(n_robots)]
         """Each robot's own grid, closed and coded, kept up to date where its scans fell."""
         self._free_count = np.zeros(shape, dtype=np.uint16)
+        self._grid_bytes: list[tuple[tuple[int, tuple[slice, slice]], tuple[int, int]] | None] = [None] * n_robots
+        """Each robot's last :func:`occupancy_grid_bytes`, by its grid's state version and window: a robot
+        whose grid did not change (driving through known space) would send the same grid again."""
         """Per cell, how many robots' own grids hold it free (their union is what the IoU compares with)."""
         self.robot_ms = 0.0
         """Milliseconds the last round spent on the robots' side, all robots together: their grids' update,
@@ -333,7 +338,12 @@ class TeamLink:
             pos = (int(positions_rc[i][0]), int(positions_rc[i][1]))
             full_bytes, delta_bytes = sender.send_onboard(grid, r, pos, window)
             t1 = time.perf_counter()
-            raw, packed = occupancy_grid_bytes(grid.state[window])
+            key = (grid.state_version, window)
+            cached = self._grid_bytes[i]
+            if cached is None or cached[0] != key:
+                cached = key, occupancy_grid_bytes(grid.state[window])
+                self._grid_bytes[i] = cached
+            raw, packed = cached[1]
             self.totals.bytes_grid += raw
             self.totals.bytes_grid_zlib += packed
             self.totals.bytes_grid_delta_zlib += sender.onboard_grid_delta_bytes(grid)
