@@ -256,10 +256,10 @@ class TeamLink:
         self.onboard = [OnBoardGrid(shape, preprocess.closing_size_cells, sensor) for _ in range(n_robots)]
         """Each robot's own grid, closed and coded, kept up to date where its scans fell."""
         self._free_count = np.zeros(shape, dtype=np.uint16)
+        """Per cell, how many robots' own grids hold it free (their union is what the IoU compares with)."""
         self._grid_bytes: list[tuple[tuple[int, tuple[slice, slice]], tuple[int, int]] | None] = [None] * n_robots
         """Each robot's last :func:`occupancy_grid_bytes`, by its grid's state version and window: a robot
         whose grid did not change (driving through known space) would send the same grid again."""
-        """Per cell, how many robots' own grids hold it free (their union is what the IoU compares with)."""
         self.robot_ms = 0.0
         """Milliseconds the last round spent on the robots' side, all robots together: their grids' update,
         closing, codes and messages, which run on board in a real team."""
