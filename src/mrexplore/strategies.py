@@ -550,7 +550,8 @@ class OraclePipeline(ExplorationPipeline):
 
 _THREADED_ROUTES_CELLS = 2_000_000
 """Grids from which :meth:`ExplorationPipeline.finish` routes the robots on the threads (the KTH floors at
-0.05 m: late in a 16-robot mission their local routes took 122 ms a decision on one thread)."""
+0.05 m: late in a 16-robot mission their local routes took 122 ms a decision on one thread under
+cProfile, ``perf/profile_decision.py --strategy hier --robots 16 --from-coverage 0.5``)."""
 
 CENTRE_COMMITMENT = 0.5
 """Default hysteresis of strategies whose goal is a cluster centre (measured on 6 maps x 2 seeds: utility
