@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import heapq
+import math
 from pathlib import Path
 
 import numpy as np
@@ -44,3 +46,32 @@ def require_shared_maps() -> Path:
     if not SHARED_MAPS.is_dir():
         pytest.skip(f"shared maps not found at {SHARED_MAPS}; real-map tests need ../shared/maps beside the repo")
     return SHARED_MAPS
+
+
+def seeded_dijkstra(passable: np.ndarray, seeds: list[tuple[int, int, float]]) -> np.ndarray:
+    """Plain heapq Dijkstra from many cells, each with its starting distance; the kernels' moves:
+    8-connected, a diagonal only where both cells it passes between are free."""
+    H, W = passable.shape
+    dist = np.full((H, W), np.inf)
+    heap = []
+    for r, c, k in seeds:
+        if passable[r, c] and k < dist[r, c]:
+            dist[r, c] = k
+            heap.append((k, (r, c)))
+    heapq.heapify(heap)
+    while heap:
+        d, (r, c) = heapq.heappop(heap)
+        if d > dist[r, c]:
+            continue
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                rr, cc = r + dr, c + dc
+                if (dr, dc) == (0, 0) or not (0 <= rr < H and 0 <= cc < W) or not passable[rr, cc]:
+                    continue
+                if dr and dc and not (passable[r, cc] and passable[rr, c]):
+                    continue
+                nd = d + (math.sqrt(2) if dr and dc else 1.0)
+                if nd < dist[rr, cc]:
+                    dist[rr, cc] = nd
+                    heapq.heappush(heap, (nd, (rr, cc)))
+    return dist

@@ -110,10 +110,19 @@ def test_routes_on_threads_give_the_mission_inline_routes_give(small_map, monkey
     import mrexplore.strategies as strategies
 
     monkeypatch.setenv("MREXPLORE_THREADS", "2")
-    runs = []
+    plain, on_threads = strategies.map_threads, []
+
+    def spied(fn, items):
+        on_threads.append(len(items))
+        return plain(fn, items)
+
+    monkeypatch.setattr(strategies, "map_threads", spied)
+    runs, calls = [], []
     for cells in (10**12, 0):
         monkeypatch.setattr(strategies, "_THREADED_ROUTES_CELLS", cells)
         runs.append(run_mission(small_map, make_strategy("hier"), SimConfig(robots=4), seed=3).measures.to_dict())
+        calls.append(len(on_threads))
+    assert calls[0] == 0 and calls[1] > 0  # inline first, then every decision's routes on the threads
     inline, threaded = ({k: v for k, v in r.items() if k not in TIMING_KEYS} for r in runs)
     assert threaded == inline
 

@@ -3,46 +3,17 @@ the coarse grid never crosses, a narrow passage it closes, and paths to far goal
 
 from __future__ import annotations
 
-import heapq
 import math
 
 import numpy as np
 import pytest
-from conftest import bool_grid
+from conftest import bool_grid, seeded_dijkstra
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mrexplore.paths.astar import path_length_cells
 from mrexplore.paths.distance_field import _Searches, distance_fields
 from mrexplore.paths.far_field import Field, NearFarField, _seeded_search, far_fields, path_to
-
-
-def seeded_reference(passable: np.ndarray, seeds: list[tuple[int, int, float]]) -> np.ndarray:
-    """Plain heapq Dijkstra from many cells, each with its starting distance; same moves as the kernel."""
-    H, W = passable.shape
-    dist = np.full((H, W), np.inf)
-    heap = []
-    for r, c, k in seeds:
-        if passable[r, c] and k < dist[r, c]:
-            dist[r, c] = k
-            heap.append((k, (r, c)))
-    heapq.heapify(heap)
-    while heap:
-        d, (r, c) = heapq.heappop(heap)
-        if d > dist[r, c]:
-            continue
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                rr, cc = r + dr, c + dc
-                if (dr, dc) == (0, 0) or not (0 <= rr < H and 0 <= cc < W) or not passable[rr, cc]:
-                    continue
-                if dr and dc and not (passable[r, cc] and passable[rr, c]):
-                    continue
-                nd = d + (math.sqrt(2) if dr and dc else 1.0)
-                if nd < dist[rr, cc]:
-                    dist[rr, cc] = nd
-                    heapq.heappush(heap, (nd, (rr, cc)))
-    return dist
 
 
 def random_rooms(seed: int, shape: tuple[int, int] = (60, 80), walls: int = 12) -> np.ndarray:
@@ -72,7 +43,7 @@ def test_seeded_search_equals_dijkstra_from_many_starts(seed: int) -> None:
     q_node, q_key, _ = s.scratch()
     flat = s.padded(picks[order, 0] * g.shape[1] + picks[order, 1])
     got = _seeded_search(s.start, s.wp, flat, keys[order], q_node, q_key).reshape(14, 17)[1:-1, 1:-1]
-    want = seeded_reference(g, [(int(r), int(c), float(k)) for (r, c), k in zip(picks, keys, strict=True)])
+    want = seeded_dijkstra(g, [(int(r), int(c), float(k)) for (r, c), k in zip(picks, keys, strict=True)])
     np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-4)
 
 

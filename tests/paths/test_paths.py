@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import heapq
 import math
 
 import numpy as np
 import pytest
-from conftest import bool_grid
+from conftest import bool_grid, seeded_dijkstra
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
@@ -24,29 +23,8 @@ from mrexplore.paths.distance_field import (
 
 
 def reference_dijkstra(passable: np.ndarray, src: tuple[int, int]) -> np.ndarray:
-    """Plain heapq Dijkstra with the same moves: 8-connected, diagonal only if both sides are free."""
-    H, W = passable.shape
-    dist = np.full((H, W), np.inf)
-    if not passable[src]:
-        return dist
-    dist[src] = 0.0
-    heap = [(0.0, src)]
-    while heap:
-        d, (r, c) = heapq.heappop(heap)
-        if d > dist[r, c]:
-            continue
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                rr, cc = r + dr, c + dc
-                if (dr, dc) == (0, 0) or not (0 <= rr < H and 0 <= cc < W) or not passable[rr, cc]:
-                    continue
-                if dr and dc and not (passable[r, cc] and passable[rr, c]):
-                    continue
-                nd = d + (math.sqrt(2) if dr and dc else 1.0)
-                if nd < dist[rr, cc]:
-                    dist[rr, cc] = nd
-                    heapq.heappush(heap, (nd, (rr, cc)))
-    return dist
+    """Plain heapq Dijkstra from one cell (all ``inf`` from a blocked one)."""
+    return seeded_dijkstra(passable, [(src[0], src[1], 0.0)])
 
 
 def test_field_by_hand_and_no_corner_cutting() -> None:

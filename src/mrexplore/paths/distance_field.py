@@ -132,6 +132,35 @@ def _start_values(passable: np.ndarray) -> np.ndarray:  # pragma: no cover - num
     return start
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def _relax(
+    best: np.ndarray, Wp: int, u: int, du: float | np.float32, q_node: np.ndarray, q_key: np.ndarray, t0: int, t1: int
+) -> tuple[int, int]:  # pragma: no cover - numba
+    """Relax the 8 neighbours of the settled padded cell ``u`` (at ``du``): straight moves (1) go to queue
+    0, diagonal ones (sqrt 2) to queue 1, each queue's keys increasing as they are pushed. Returns the
+    queues' new lengths."""
+    zero = np.float32(0.0)
+    b_up, b_down, b_left, b_right = best[u - Wp], best[u + Wp], best[u - 1], best[u + 1]
+    nd = du + np.float32(1.0)
+    for v, bv in ((u - Wp, b_up), (u + Wp, b_down), (u - 1, b_left), (u + 1, b_right)):
+        if nd < bv:  # false for a blocked cell (_BLOCKED) and for one already as near
+            best[v] = nd
+            q_node[0, t0] = v
+            q_key[0, t0] = nd
+            t0 += 1
+    # A diagonal move needs both orthogonal cells it passes between (no corner cutting).
+    up, down, left, right = b_up >= zero, b_down >= zero, b_left >= zero, b_right >= zero
+    nd = du + np.float32(math.sqrt(2.0))
+    ul, ur, dl, dr = up and left, up and right, down and left, down and right
+    for v, ok in ((u - Wp - 1, ul), (u - Wp + 1, ur), (u + Wp - 1, dl), (u + Wp + 1, dr)):
+        if ok and nd < best[v]:
+            best[v] = nd
+            q_node[1, t1] = v
+            q_key[1, t1] = nd
+            t1 += 1
+    return t0, t1
+
+
 @nb.njit(cache=True, nogil=True)
 def _search_into(
     best: np.ndarray,
@@ -167,8 +196,6 @@ def _search_into(
         q_node[0, 0] = s
         q_key[0, 0] = 0.0
         t0 = 1
-    sqrt2 = np.float32(math.sqrt(2.0))
-    one = np.float32(1.0)
     while h0 < t0 or h1 < t1:
         if h1 >= t1 or (h0 < t0 and q_key[0, h0] <= q_key[1, h1]):
             u = q_node[0, h0]
@@ -194,24 +221,7 @@ def _search_into(
                     if best[v] > du:
                         best[v] = inf
                 break
-        b_up, b_down, b_left, b_right = best[u - Wp], best[u + Wp], best[u - 1], best[u + 1]
-        nd = du + one
-        for v, bv in ((u - Wp, b_up), (u + Wp, b_down), (u - 1, b_left), (u + 1, b_right)):
-            if nd < bv:  # false for a blocked cell (_BLOCKED) and for one already as near
-                best[v] = nd
-                q_node[0, t0] = v
-                q_key[0, t0] = nd
-                t0 += 1
-        # A diagonal move needs both orthogonal cells it passes between (no corner cutting).
-        up, down, left, right = b_up >= zero, b_down >= zero, b_left >= zero, b_right >= zero
-        nd = du + sqrt2
-        ul, ur, dl, dr = up and left, up and right, down and left, down and right
-        for v, ok in ((u - Wp - 1, ul), (u - Wp + 1, ur), (u + Wp - 1, dl), (u + Wp + 1, dr)):
-            if ok and nd < best[v]:
-                best[v] = nd
-                q_node[1, t1] = v
-                q_key[1, t1] = nd
-                t1 += 1
+        t0, t1 = _relax(best, Wp, u, du, q_node, q_key, t0, t1)
     if stop_early:
         for v in targets:
             is_target[v] = False  # targets never settled (unreachable) stay marked otherwise

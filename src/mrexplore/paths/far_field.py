@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrexplore.boxes import mask_box
-from mrexplore.paths.distance_field import Field, _search_into, _Searches, descend_path, distance_fields
+from mrexplore.paths.distance_field import Field, _relax, _search_into, _Searches, descend_path, distance_fields
 from mrexplore.threads import map_threads
 from mrexplore.types import BoolGrid, GridRC
 
@@ -47,8 +47,6 @@ def _seeded_search(
     """
     inf = np.float32(np.inf)
     zero = np.float32(0.0)
-    one = np.float32(1.0)
-    sqrt2 = np.float32(math.sqrt(2.0))
     best = start.copy()
     ns = seeds.shape[0]
     for j in range(ns):
@@ -76,23 +74,7 @@ def _seeded_search(
             h1 += 1
         if best[u] < zero or du > best[u]:
             continue  # blocked seed, or stale: settled with a smaller key
-        b_up, b_down, b_left, b_right = best[u - Wp], best[u + Wp], best[u - 1], best[u + 1]
-        nd = du + one
-        for v, bv in ((u - Wp, b_up), (u + Wp, b_down), (u - 1, b_left), (u + 1, b_right)):
-            if nd < bv:
-                best[v] = nd
-                q_node[0, t0] = v
-                q_key[0, t0] = nd
-                t0 += 1
-        up, down, left, right = b_up >= zero, b_down >= zero, b_left >= zero, b_right >= zero
-        nd = du + sqrt2
-        ul, ur, dl, dr = up and left, up and right, down and left, down and right
-        for v, ok in ((u - Wp - 1, ul), (u - Wp + 1, ur), (u + Wp - 1, dl), (u + Wp + 1, dr)):
-            if ok and nd < best[v]:
-                best[v] = nd
-                q_node[1, t1] = v
-                q_key[1, t1] = nd
-                t1 += 1
+        t0, t1 = _relax(best, Wp, u, du, q_node, q_key, t0, t1)
     for i in range(best.shape[0]):
         if best[i] < zero:
             best[i] = inf

@@ -2,7 +2,7 @@
 
 Each round a robot sends the sparse frontier map of its closed grid. Recomputing the three-state view,
 the closing and the neighbour codes over every cell it knows costs in proportion to what it has seen
-(about a million cells per robot late on a KTH floor at 0.05 m); a scan changes a few thousand. So the
+(it grows as the floor is explored); a scan changes cells within the sensor's range only. So the
 robot keeps the three grids over the whole map and redoes them only in the box of the scans since its
 last round, grown by how far each step reads: the closing reads free cells up to
 :func:`~mrexplore.preprocessing.frontiers.closing_reach` away, a code its four neighbours. The result is
