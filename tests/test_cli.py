@@ -155,6 +155,7 @@ def test_train_smoke_then_explore_with_that_policy(tmp_path, capsys) -> None:
     cfg.write_text(
         "train:\n  resolution_m: 0.2\n  robots_max: 2\n  max_steps: 60\n  val_maps: 1\n  dagger_rounds: 1\n"
         "  episodes_per_round: 1\n  horizon_steps: 15\n  imitation_epochs: 1\n  ppo_iterations: 0\n"
+        "  search_generations: 1\n  search_population: 2\n  search_elites: 1\n  search_episodes: 1\n"
         "  learned:\n    hidden: 8\n"
     )
     out = tmp_path / "run"

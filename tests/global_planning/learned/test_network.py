@@ -28,6 +28,7 @@ def net() -> MultiGraphNet:
     n = MultiGraphNet(LearnedConfig(), value_inputs=4)
     # a trained-looking network: the residual's zero-initialised last layer is randomised too
     torch.nn.init.normal_(n.score[-1].weight, std=0.5)
+    n.set_edge_weights([1.0, -2.0, 0.5, 3.0, -1.0])  # and the linear edge path
     return n.eval()
 
 
@@ -76,3 +77,36 @@ def test_untrained_residual_is_zero_and_gradients_are_finite() -> None:
     loss = vr2.sum() + vc2.sum() + n.value_of(vr2, vc2, robot_without_cluster, torch.zeros(1, 4)).sum()
     loss.backward()
     assert all(torch.isfinite(p.grad).all() for p in n.parameters() if p.grad is not None)
+
+
+def test_edge_path_adds_edge_features_times_its_weights() -> None:
+    n = MultiGraphNet(LearnedConfig(), value_inputs=4)
+    w = np.array([1.0, -2.0, 0.5, 3.0, -1.0])
+    n.set_edge_weights(w)
+    assert n.edge_weights.tolist() == w.tolist()
+    g = _random_inputs(np.random.default_rng(4), 3, 5)
+    aff = _aff(n, [g])[0].numpy()
+    reach = g.reachable
+    # the scoring MLP's last layer is still zero: the residual is exactly edges . w
+    assert np.allclose(aff[reach] - g.base[reach], (g.edges.astype(np.float64) @ w)[reach], atol=1e-5)
+
+
+def test_gradients_never_move_the_edge_path() -> None:
+    n = MultiGraphNet(LearnedConfig(), value_inputs=4)
+    n.set_edge_weights([0.0, 0.0, -5.0, 0.0, 5.0])
+    g = _random_inputs(np.random.default_rng(5), 2, 3)
+    aff, _, _ = n(collate([g]))
+    aff[torch.isfinite(aff)].sum().backward()
+    assert n.edge_head.weight.grad is None and n.score[-1].weight.grad is not None
+
+
+def test_a_policy_saved_before_the_edge_path_loads_with_it_at_zero() -> None:
+    old = MultiGraphNet(LearnedConfig(), value_inputs=4).state_dict()
+    del old["edge_head.weight"]
+    n = MultiGraphNet(LearnedConfig(), value_inputs=4)
+    n.set_edge_weights([1.0, 1.0, 1.0, 1.0, 1.0])
+    n.load_state_dict(old)
+    assert n.edge_weights.tolist() == [0.0] * EDGE_FEATURES
+    del old["score.0.weight"]  # any other missing weight is still an error
+    with pytest.raises(RuntimeError, match="Missing key"):
+        n.load_state_dict(old)

@@ -19,6 +19,7 @@ TINY = TrainConfig(
     robots_max=2,
     max_steps=80,
     val_maps=1,
+    search_generations=0,
     dagger_rounds=1,
     episodes_per_round=1,
     horizon_steps=20,
@@ -54,6 +55,29 @@ def test_stop_and_resume_runs_every_stage_once(tmp_path: Path) -> None:
     assert state["state"]["stage"] == 3 and state["state"]["episodes"] == 2
     policy = load_policy(out / "policy.pt")
     assert policy.meta["meta"]["stage"] == second.best_stage
+
+
+def test_policy_search_moves_the_edge_weights_to_its_elites_and_resumes(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    cfg = replace(TINY, search_generations=2, search_population=3, search_elites=1, search_episodes=1)
+    cfg = replace(cfg, dagger_rounds=0, ppo_iterations=0)
+    out = tmp_path / "run"
+    first = train(cfg, out, None, episodes=3, workers=1, seed=5)  # the budget holds one generation
+    assert [r["stage"] for r in first.stages] == ["baseline", "search0"]
+    state = torch.load(out / "state.pt", weights_only=True)
+    assert state["state"]["episodes"] == 3 and len(state["state"]["search_sigma"]) == 5
+    w0 = state["net"]["edge_head.weight"][0].tolist()
+    log = _rows(out / "log.csv")
+    # one elite: the next weights are exactly the winning candidate's, and the log says which
+    assert [float(v) for v in log[1]["edge_weights"].split()] == pytest.approx(w0, abs=1e-3)
+    assert float(log[1]["search_best_steps"]) <= float(log[1]["steps_mean"])  # the current mean was a candidate
+    assert all(s == 0.5 for s in state["state"]["search_sigma"])  # one elite has no spread: the floor
+    second = train(cfg, out, None, workers=1, seed=5, resume=True)
+    assert [r["stage"] for r in second.stages] == ["baseline", "search0", "search1"]
+    assert torch.load(out / "state.pt", weights_only=True)["state"]["episodes"] == 6
+    kept = load_policy(out / "policy.pt")
+    assert kept.meta["meta"]["stage"] == second.best_stage
 
 
 def test_nothing_to_resume(tmp_path: Path) -> None:

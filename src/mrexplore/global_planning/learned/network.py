@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
+from numpy.typing import NDArray
 from torch import Tensor, nn
 
 from mrexplore.config import LearnedConfig
@@ -116,6 +117,13 @@ class _CrossGraph(nn.Module):
         return x + self.f_v(torch.cat([x, a], dim=-1))
 
 
+def _zero_edge_head_if_missing(state: dict[str, Tensor], prefix: str, *args: object) -> None:
+    """Policies saved before the linear edge path had none: they load with it at zero (their behaviour)."""
+    key = prefix + "edge_head.weight"
+    if key not in state and prefix + "score.2.weight" in state:
+        state[key] = torch.zeros(1, EDGE_FEATURES)
+
+
 class MultiGraphNet(nn.Module):
     """mGNN: robot and cluster nodes lifted to ``hidden`` by MLPs, ``blocks`` blocks of [robot self-graph,
     cluster self-graph, robots <- clusters, clusters <- robots], then a score per robot-cluster pair.
@@ -140,6 +148,12 @@ class MultiGraphNet(nn.Module):
         assert isinstance(last, nn.Linear)
         nn.init.zeros_(last.weight)
         nn.init.zeros_(last.bias)
+        # A linear path from the edge features straight to the residual, zero at the start. The trainer's
+        # policy search (stage ``search``) sets it; gradients never move it (imitation and PPO train the rest).
+        self.edge_head = nn.Linear(EDGE_FEATURES, 1, bias=False)
+        nn.init.zeros_(self.edge_head.weight)
+        self.edge_head.weight.requires_grad_(False)
+        self._register_load_state_dict_pre_hook(_zero_edge_head_if_missing)
         self.value_inputs = value_inputs
         self.value = _mlp(2 * h + value_inputs, h, 1)
 
@@ -157,13 +171,28 @@ class MultiGraphNet(nn.Module):
             vr = vr_next
         return vr, vc
 
+    def edge_path(self, batch: GraphBatch) -> Tensor:
+        """The linear edge path's part of the residual, ``(B, R, C)``."""
+        return self.edge_head(batch.edges).squeeze(-1)
+
     def residual(self, vr: Tensor, vc: Tensor, batch: GraphBatch) -> Tensor:
-        """The learned part of the affinity, ``(B, R, C)`` (zero for an untrained network)."""
+        """The learned part of the affinity, ``(B, R, C)`` (zero for an untrained network): the scoring
+        MLP plus the linear edge path."""
         R, C = vr.shape[1], vc.shape[1]
         pair = torch.cat(
             [vr[:, :, None, :].expand(-1, -1, C, -1), vc[:, None, :, :].expand(-1, R, -1, -1), batch.edges], -1
         )
-        return self.score(pair).squeeze(-1)
+        return self.score(pair).squeeze(-1) + self.edge_path(batch)
+
+    @property
+    def edge_weights(self) -> NDArray[np.float64]:
+        """The linear edge path's weights, ``(EDGE_FEATURES,)``: residual += edges . w."""
+        return self.edge_head.weight.detach().double().numpy()[0].copy()
+
+    def set_edge_weights(self, w: Sequence[float] | NDArray[np.floating]) -> None:
+        """Set the linear edge path (the policy search's candidates)."""
+        with torch.no_grad():
+            self.edge_head.weight.copy_(torch.as_tensor(np.asarray(w, np.float32)).reshape(1, EDGE_FEATURES))
 
     def forward(self, batch: GraphBatch) -> tuple[Tensor, Tensor, Tensor]:
         """Affinities ``(B, R, C)`` (``-inf`` where a pair is not allowed) and the nodes ``(B, R|C, h)``."""

@@ -37,7 +37,7 @@ from mrexplore.global_planning.learned.expert import (
     lookahead_returns,
     privileged_scalars,
 )
-from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs
+from mrexplore.global_planning.learned.features import EDGE_FEATURES, GraphInputs, graph_inputs
 from mrexplore.global_planning.learned.ncm_network import (
     NcmCritic,
     NcmNet,
@@ -54,6 +54,7 @@ from mrexplore.global_planning.learned.policy import (
     sequential_log_prob,
 )
 from mrexplore.global_planning.learned.ppo import PPOStats, gae, listwise_loss, ppo_loss
+from mrexplore.global_planning.learned.search import cross_entropy_step, search_candidates
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission
@@ -68,6 +69,7 @@ LOG_COLUMNS = [
     "time_s", "stage", "episodes", "decisions", "labels", "loss", "expert_agreement", "expert_gain", "kl",
     "clip_fraction", "entropy", "value_loss", "return_mean", "steps_mean", "coverage_mean", "val_steps_mean",
     "val_coverage_mean", "val_sampled_steps_mean", "val_sampled_coverage_mean", "decisions_per_s",
+    "search_best_steps", "edge_weights",
 ]  # fmt: skip
 _VAL_SEED0 = 1_000_000
 """Procedural validation plans use seeds from here; training plans draw seeds below it."""
@@ -427,8 +429,9 @@ def _imitation_loss(
     scores = assignment_score(aff, cands)
     loss = listwise_loss(scores, rets, valid, temperature)
     if residual_l2 > 0:
+        # the scoring MLP's part only: the linear edge path is the policy search's, which this must not undo
         allowed = torch.isfinite(aff)
-        residual = torch.where(allowed, aff - batch.base, torch.zeros_like(aff))
+        residual = torch.where(allowed, aff - batch.base - net.edge_path(batch), torch.zeros_like(aff))
         loss = loss + residual_l2 * (residual**2).sum() / allowed.sum().clamp(min=1)
     with torch.no_grad():
         pick = torch.where(valid, scores, torch.full_like(scores, -1e9)).argmax(-1)
@@ -566,6 +569,55 @@ def _ncm_update(
     return _ppo(net, opt, trajectories, 1.0, n.gae_lambda, n.ppo_epochs, rng, minibatch_loss)
 
 
+def _search_generation(
+    net: MultiGraphNet,
+    st: _State,
+    cfg: TrainConfig,
+    rng: np.random.Generator,
+    budget: int,
+    train_maps: list[str],
+    run: Callable[[list[_Job]], list[dict[str, Any]]],
+) -> dict[str, Any]:
+    """One generation of the cross-entropy search: candidates around the current edge weights, each run on
+    the same training episodes (deterministic decoding); the network takes the elites' mean. Only episodes
+    every candidate finished count (a deadline may cut the generation)."""
+    n = budget // cfg.search_population
+    if n == 0:
+        return {}
+    sigma = np.asarray(st.search_sigma) if st.search_sigma is not None else np.full(EDGE_FEATURES, cfg.search_sigma)
+    cands = search_candidates(net.edge_weights, sigma, cfg.search_population, rng)
+    episodes = _episode_jobs("eval", n, train_maps, cfg, rng, None)
+    jobs: list[_Job] = []
+    for c, w in enumerate(cands):
+        net.set_edge_weights(w)
+        weights = _weights(net)
+        jobs += [replace(j, weights=weights, index=c * n + e) for e, j in enumerate(episodes)]
+    net.set_edge_weights(cands[0])
+    results = run(jobs)
+    steps = np.full((len(cands), n), np.nan)
+    coverage = np.full((len(cands), n), np.nan)
+    decisions = 0
+    for r in results:
+        c, e = divmod(int(r["index"]), n)
+        steps[c, e], coverage[c, e] = r["steps"], r["coverage"]
+        decisions += int(r["decisions"])
+    st.episodes += len(results)
+    common = np.isfinite(steps).all(axis=0)
+    if not common.any():
+        return {}
+    mean_steps = steps[:, common].mean(axis=1)
+    new_mean, new_sigma = cross_entropy_step(cands, mean_steps, cfg.search_elites, cfg.search_sigma_min)
+    net.set_edge_weights(new_mean)
+    st.search_sigma = [float(v) for v in new_sigma]
+    return {
+        "decisions": decisions,
+        "steps_mean": float(mean_steps[0]),
+        "coverage_mean": float(coverage[0, common].mean()),
+        "search_best_steps": float(mean_steps.min()),
+        "edge_weights": " ".join(f"{v:.3f}" for v in new_mean),
+    }
+
+
 def _optimizer(net: MultiGraphNet | NcmActorCritic, cfg: TrainConfig) -> torch.optim.Optimizer:
     if isinstance(net, NcmActorCritic):
         return torch.optim.Adam(
@@ -588,6 +640,8 @@ class _State:
     best_val: float = math.inf
     best_stage: str = ""
     stage_rows: list[dict[str, Any]] = field(default_factory=list)
+    search_sigma: list[float] | None = None
+    """The policy search's spread per edge weight after the last generation (None: none ran yet)."""
     log_rows: int = -1
     """Rows of log.csv when the state was saved (a resumed run drops later ones: it writes them again);
     -1: not recorded (a state from before this field), keep every row."""
@@ -606,7 +660,10 @@ def _stages(cfg: TrainConfig) -> list[str]:
     if cfg.strategy == "ncm":
         return ["baseline"] + [f"ppo{k}" for k in range(cfg.ncm.ppo_iterations)]
     return (
-        ["baseline"] + [f"dagger{k}" for k in range(cfg.dagger_rounds)] + [f"ppo{k}" for k in range(cfg.ppo_iterations)]
+        ["baseline"]
+        + [f"search{k}" for k in range(cfg.search_generations)]
+        + [f"dagger{k}" for k in range(cfg.dagger_rounds)]
+        + [f"ppo{k}" for k in range(cfg.ppo_iterations)]
     )
 
 
@@ -772,6 +829,12 @@ def train(
                     "return_mean": float(np.mean([r["rewards"].sum() for r in results])) if results else None
                 }
                 row |= _ncm_update(net, opt, results, cfg, rng)
+            elif stage.startswith("search"):
+                # cross-entropy search over the linear edge weights, every candidate on the same episodes
+                row |= _search_generation(
+                    net, st, cfg, rng, budget_left(cfg.search_population * cfg.search_episodes), train_maps,
+                    lambda jobs: runner.results(placed(jobs), deadline),
+                )  # fmt: skip
             elif stage.startswith("dagger"):
                 # collect: the student drives, the expert labels its decisions
                 jobs = placed(
@@ -838,6 +901,7 @@ def train(
                         "val_coverage_mean",
                         "val_sampled_steps_mean",
                         "val_sampled_coverage_mean",
+                        "edge_weights",
                         "time_s",
                     )
                     if k in row or not k.startswith("val_sampled")
