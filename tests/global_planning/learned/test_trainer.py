@@ -80,6 +80,16 @@ def test_policy_search_moves_the_edge_weights_to_its_elites_and_resumes(tmp_path
     assert kept.meta["meta"]["stage"] == second.best_stage
 
 
+def test_a_budget_under_one_search_generation_skips_the_search(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    said: list[str] = []
+    cfg = replace(TINY, search_generations=1, search_population=3, search_elites=1, ppo_iterations=0)
+    run = train(cfg, tmp_path / "run", None, episodes=2, workers=1, seed=5, say=said.append)
+    assert [r["stage"] for r in run.stages] == ["baseline", "dagger0"]
+    assert "2 episodes left, under a search generation's 3; skipping search0" in said
+
+
 def test_nothing_to_resume(tmp_path: Path) -> None:
     with pytest.raises(MrExploreError, match=r"nothing to resume in .* \(no state.pt\); drop --resume"):
         train(TINY, tmp_path, None, resume=True)

@@ -816,6 +816,13 @@ def train(
             ):
                 say(f"budget spent before stage {stage}; stopping")
                 break
+            left = budget_left(cfg.search_population)
+            if stage.startswith("search") and left < cfg.search_population:
+                # a generation needs an episode per vector at least: go on to the stages that fit the budget
+                say(f"{left} episodes left, under a search generation's {cfg.search_population}; skipping {stage}")
+                st.stage += 1
+                bar.update()
+                continue
             t0 = time.perf_counter()
             row: dict[str, Any] = {"stage": stage}
             if stage == "baseline":
