@@ -116,6 +116,12 @@ def _within(box: Box, outer: tuple[slice, slice]) -> tuple[slice, slice]:
     return slice(box[0] - r, box[1] - r), slice(box[2] - c, box[3] - c)
 
 
+@nb.njit(cache=True, inline="always")
+def _outside(cell: int, W: int, box: Box) -> bool:  # pragma: no cover - numba
+    r, c = cell // W, cell % W
+    return not (box[0] <= r < box[1] and box[2] <= c < box[3])
+
+
 @nb.njit(cache=True)
 def _spliced(cells: np.ndarray, codes: np.ndarray, box: Box) -> np.ndarray:  # pragma: no cover - numba
     """``cells`` (increasing row-major indices of coded cells) with those inside ``box`` replaced by the
@@ -125,14 +131,8 @@ def _spliced(cells: np.ndarray, codes: np.ndarray, box: Box) -> np.ndarray:  # p
     n_new = 0
     for r in range(r0, r1):
         for c in range(c0, c1):
-            if codes[r, c] != 0:
-                n_new += 1
-    n_kept = 0
-    for k in range(len(cells)):
-        r, c = cells[k] // W, cells[k] % W
-        if not (r0 <= r < r1 and c0 <= c < c1):
-            n_kept += 1
-    out = np.empty(n_kept + n_new, dtype=np.int64)
+            n_new += codes[r, c] != 0
+    out = np.empty(len(cells) + n_new, dtype=np.int64)  # at least enough: the old cells inside the box drop out
     j = 0
     o = 0
     for r in range(r0, r1):
@@ -141,17 +141,14 @@ def _spliced(cells: np.ndarray, codes: np.ndarray, box: Box) -> np.ndarray:  # p
                 continue
             cell = r * W + c
             while j < len(cells) and cells[j] < cell:
-                rr, cc = cells[j] // W, cells[j] % W
-                if not (r0 <= rr < r1 and c0 <= cc < c1):
+                if _outside(cells[j], W, box):
                     out[o] = cells[j]
                     o += 1
                 j += 1
             out[o] = cell
             o += 1
-    while j < len(cells):
-        rr, cc = cells[j] // W, cells[j] % W
-        if not (r0 <= rr < r1 and c0 <= cc < c1):
-            out[o] = cells[j]
+    for k in range(j, len(cells)):
+        if _outside(cells[k], W, box):
+            out[o] = cells[k]
             o += 1
-        j += 1
-    return out
+    return out[:o]

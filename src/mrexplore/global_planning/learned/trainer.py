@@ -580,10 +580,9 @@ def _search_generation(
 ) -> dict[str, Any]:
     """One generation of the cross-entropy search: candidates around the current edge weights, each run on
     the same training episodes (deterministic decoding); the network takes the elites' mean. Only episodes
-    every candidate finished count (a deadline may cut the generation)."""
+    every candidate finished count (a deadline may cut the generation). ``budget``: episodes it may run,
+    at least one per vector (the caller skips a generation that does not fit)."""
     n = budget // cfg.search_population
-    if n == 0:
-        return {}
     sigma = np.asarray(st.search_sigma) if st.search_sigma is not None else np.full(EDGE_FEATURES, cfg.search_sigma)
     cands = search_candidates(net.edge_weights, sigma, cfg.search_population, rng)
     episodes = _episode_jobs("eval", n, train_maps, cfg, rng, None)
@@ -816,8 +815,7 @@ def train(
             ):
                 say(f"budget spent before stage {stage}; stopping")
                 break
-            left = budget_left(cfg.search_population)
-            if stage.startswith("search") and left < cfg.search_population:
+            if stage.startswith("search") and (left := budget_left(cfg.search_population)) < cfg.search_population:
                 # a generation needs an episode per vector at least: go on to the stages that fit the budget
                 say(f"{left} episodes left, under a search generation's {cfg.search_population}; skipping {stage}")
                 st.stage += 1
