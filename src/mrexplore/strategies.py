@@ -11,17 +11,30 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
-from mrexplore.boxes import mask_box
+from mrexplore.boxes import Box, mask_box
 from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig, SimConfig
 from mrexplore.global_planning.classical import GeodesicPlanner, NearestPlanner, UtilityPlanner
-from mrexplore.global_planning.coscan import cap_tasks, lloyd_clusters, sample_tasks, two_opt_tour
+from mrexplore.global_planning.coscan import (
+    TaskRows,
+    cap_tasks,
+    lloyd_clusters,
+    matrix_rows,
+    sample_tasks,
+    two_opt_tour,
+)
 from mrexplore.global_planning.ncm_nodes import ncm_frontier, pool_nodes
 from mrexplore.global_planning.oracle import plan_oracle_routes
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem, GlobalPlanner
 from mrexplore.local_planning.router import LocalRouter
 from mrexplore.maps.ground_truth import GroundTruthMap, explorable_region
-from mrexplore.paths.distance_field import Field, distance_fields, distance_matrix, distances_at
-from mrexplore.paths.far_field import NearFarField, far_fields, path_to
+from mrexplore.paths.distance_field import (
+    Field,
+    distance_fields,
+    distance_matrix,
+    distances_at,
+    pairwise_distances,
+)
+from mrexplore.paths.far_field import CoarseGrid, NearFarField, coarse_grid, far_fields, path_to
 from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers, split_for_team
 from mrexplore.preprocessing.frontiers import Frontiers, detect_frontiers
 from mrexplore.threads import map_threads
@@ -32,6 +45,7 @@ __all__ = [
     "PosedDecision",
     "CandidateQuery",
     "CandidateSet",
+    "FarDistances",
     "ExplorationPipeline",
     "STRATEGIES",
     "policy_for",
@@ -119,6 +133,25 @@ def _decision(
 
 
 @dataclass(frozen=True)
+class FarDistances:
+    """Distances on a large map: exact within ``radius_cells`` of the source, estimated beyond on ``grid``'s
+    blocks (:func:`~mrexplore.paths.far_field.far_fields`); one pooled grid shared by a decision's searches."""
+
+    radius_cells: int
+    grid: CoarseGrid
+
+    def fields(
+        self,
+        passable: BoolGrid,
+        sources_rc: NDArray[np.integer],
+        must_rc: NDArray[np.integer] | None = None,
+        own_rc: Sequence[NDArray[np.int32]] | None = None,
+    ) -> list[NearFarField]:
+        """One near/far field per source (``must_rc``, ``own_rc``: as :func:`far_fields`)."""
+        return far_fields(passable, sources_rc, self.radius_cells, self.grid.factor, must_rc, own_rc, self.grid)
+
+
+@dataclass(frozen=True)
 class CandidateQuery:
     """What a strategy may look at when it builds its candidates (one decision at the centre)."""
 
@@ -129,11 +162,15 @@ class CandidateQuery:
     """Frontier cells that stopped being candidates (stood on without resolving them; stalled goals)."""
     robots_rc: NDArray[np.int32]
     """``(n_robots, 2) int32`` the cells of the robots assigned to."""
-    fields: Callable[[], list[Field]]
-    """Each robot's distance field on the planning grid, computed once, on the first call."""
+    fields: Callable[[], list[RobotField]]
+    """Each robot's distances on the planning grid, computed once, on the first call: whole exact fields,
+    or near/far fields where :attr:`far` is set."""
     current: Sequence[NDArray[np.int32]] | None
     """Each robot's current route (its goal first; empty for none)."""
     resolution_m: float
+    far: FarDistances | None = None
+    """How distances beyond an exact radius are estimated where the known passable box holds more than
+    ``far_above_cells``; None where every distance is exact."""
 
 
 @dataclass(frozen=True)
@@ -294,15 +331,19 @@ class ExplorationPipeline:
         frontiers = detect_frontiers(state)
         planning = self.planning_state(state)
         passable = planning == CellState.FREE
-        computed: list[list[Field]] = []
+        computed: list[list[RobotField]] = []
+        box, far = self._extent(passable, resolution_m)
 
-        def fields_now(targets_rc: NDArray[np.integer] | None = None) -> list[Field]:
+        def fields_now() -> list[RobotField]:
             if not computed:
-                computed.append(distance_fields(passable, robots_rc, targets_rc))
+                if far is None:
+                    computed.append(list(distance_fields(passable, robots_rc)))
+                else:
+                    computed.append(list(far.fields(passable, robots_rc)))
             return computed[0]
 
         cand = self.candidates(
-            CandidateQuery(state, frontiers, blacklist, robots_rc, fields_now, current, resolution_m)
+            CandidateQuery(state, frontiers, blacklist, robots_rc, fields_now, current, resolution_m, far)
         )
         clusters = cand.clusters
         n = len(robots_rc)
@@ -315,7 +356,12 @@ class ExplorationPipeline:
         goals = [r[:1] for r in current] if current is not None else []
         targets = np.vstack([clusters.centers_rc, clusters.members_rc, robots_rc, *goals])
         own = goals if self.commitment < 1 else []  # a robot's own goal is read for hysteresis only
-        fields = self._fields(passable, robots_rc, targets, clusters.centers_rc, own, resolution_m, computed)
+        if computed:  # the strategy's candidates asked for them
+            fields = computed[0]
+        elif far is None:
+            fields = list(distance_fields(passable, robots_rc, targets, box=box))
+        else:
+            fields = list(far.fields(passable, robots_rc, clusters.centers_rc, own))
         dist = np.stack([distances_at(f, clusters.centers_rc) for f in fields])
         kept = self._committed(clusters, fields, current, dist) if current is not None and self.commitment < 1 else {}
         if not np.isfinite(dist).any():
@@ -333,31 +379,20 @@ class ExplorationPipeline:
         )
         return PosedDecision(problem, None, _Posed(frontiers, fields, passable, kept, cand))
 
-    def _fields(
-        self,
-        passable: BoolGrid,
-        robots_rc: NDArray[np.int32],
-        targets_rc: NDArray[np.integer],
-        must_rc: NDArray[np.integer],
-        own_rc: Sequence[NDArray[np.int32]],
-        resolution_m: float,
-        computed: list[list[Field]],
-    ) -> list[RobotField]:
-        """Each robot's distances: whole fields where the strategy already asked for them, exact fields
-        stopped at ``targets_rc`` while the known passable box holds up to ``far_above_cells``, near/far
-        fields beyond it (``must_rc``, the centres, and each robot's ``own_rc``, its goal, answered
-        wherever the exact search does: :func:`~mrexplore.paths.far_field.far_fields`)."""
-        if computed:
-            return list(computed[0])
+    def _extent(self, passable: BoolGrid, resolution_m: float) -> tuple[Box | None, FarDistances | None]:
+        """Where robots' distances are searched: the known passable box (None: the whole grid), and near/far
+        fields where that box holds more than ``far_above_cells`` (None: exact fields, stopped once they
+        reach every cell they are read at)."""
         cfg = self.distances
         factor = round(cfg.coarse_cell_m / resolution_m)
         if passable.size <= cfg.far_above_cells or factor < 2:
-            return list(distance_fields(passable, robots_rc, targets_rc))
+            return None, None
         box = mask_box(passable)
         if box is None or (box[1] - box[0]) * (box[3] - box[2]) <= cfg.far_above_cells:
-            return list(distance_fields(passable, robots_rc, targets_rc, box=box))
-        radius = max(1, round(cfg.exact_radius_m / resolution_m))
-        return list(far_fields(passable, robots_rc, radius, factor, must_rc, own_rc))
+            return box, None
+        grid = coarse_grid(passable, factor)
+        assert grid is not None  # the box holds a passable cell
+        return box, FarDistances(max(1, round(cfg.exact_radius_m / resolution_m)), grid)
 
     def assign(self, posed: PosedDecision) -> Assignment:
         """The global layer's answer to a posed decision: the planner's, or the owners the strategy fixed."""
@@ -428,12 +463,89 @@ def _denoised_un(frontiers: Frontiers, blacklist: BoolGrid | None, min_size: int
 
 @dataclass(frozen=True)
 class _CoScanTasks:
-    """CoScan's candidates' context: the tasks, robot-to-task and task-to-task distances, task labels."""
+    """CoScan's candidates' context: the tasks, robot-to-task distances, task-to-task distances (rows on
+    demand), task labels, and the passable grid with the near/far extent where distances are estimated."""
 
     tasks_rc: NDArray[np.int32]
     d_robots: NDArray[np.float64]
-    d_tasks: NDArray[np.float64]
+    rows: TaskRows
     labels: NDArray[np.int64]
+    passable: BoolGrid
+    far: FarDistances | None
+
+    def between(self, members: NDArray[np.int64]) -> NDArray[np.float64]:
+        """``(k, k)`` distances between the tasks ``members``: rows of the whole matrix on a map searched
+        exactly; on a near/far map, exact searches on the members' box grown by the exact radius (a cluster
+        spans about ``2 delta_m``), rows of near/far fields for the pairs whose way leaves that box."""
+        if self.far is None:
+            return self.rows(members)[:, members]
+        pts = self.tasks_rc[members].astype(np.int64)
+        margin = self.far.radius_cells
+        r0, c0 = np.maximum(pts.min(axis=0) - margin, 0)
+        r1, c1 = np.minimum(pts.max(axis=0) + margin + 1, self.passable.shape)
+        d = pairwise_distances(self.passable[r0:r1, c0:c1], pts - (r0, c0))
+        gone = ~np.isfinite(d)
+        if gone.any():  # a way round outside the box (d is symmetric, so both ends of a pair are here)
+            lost = np.flatnonzero(gone.any(axis=1))
+            d[lost] = np.where(gone[lost], self.rows(members[lost])[:, members], d[lost])
+        return np.minimum(d, d.T)
+
+
+class _NearFarRows:
+    """Task-to-task distances on a near/far map, a row per task searched when first read (Lloyd reads its
+    centroids' rows only: a whole matrix was 48 whole-floor searches a decision on a KTH floor at 0.05 m).
+
+    Row i is task i's near/far field read at every task. Where the coarse grid leaves task j at ``inf``
+    (behind a passage narrower than two blocks: common just after a floor's known box outgrows
+    ``far_above_cells``), task j's own field read at task i is used, and where that is ``inf`` too, an exact
+    search from task i stopped at the tasks still missing."""
+
+    def __init__(self, passable: BoolGrid, tasks_rc: NDArray[np.int32], far: FarDistances) -> None:
+        self.passable, self.tasks, self.far = passable, tasks_rc, far
+        self.raw: dict[int, NDArray[np.float64]] = {}
+        """Rows read off each task's own near/far field alone."""
+        self.cache: dict[int, NDArray[np.float64]] = {}
+        """Rows with their ``inf`` entries filled."""
+
+    def _raw(self, idx: Sequence[int]) -> None:
+        new = [i for i in dict.fromkeys(idx) if i not in self.raw]
+        if new:
+            for i, f in zip(new, self.far.fields(self.passable, self.tasks[new]), strict=True):
+                self.raw[i] = f.at(self.tasks)
+
+    def __call__(self, idx: NDArray[np.int64]) -> NDArray[np.float64]:
+        new = [i for i in dict.fromkeys(np.asarray(idx).tolist()) if i not in self.cache]
+        self._raw(new)
+        self._raw([int(j) for i in new for j in np.flatnonzero(~np.isfinite(self.raw[i]))])
+        for i in new:
+            row = self.raw[i].copy()
+            for j in np.flatnonzero(~np.isfinite(row)):
+                row[j] = self.raw[int(j)][i]
+            still = np.flatnonzero(~np.isfinite(row))
+            if len(still):
+                row[still] = distance_matrix(self.passable, self.tasks[i : i + 1], self.tasks[still])[0]
+            self.cache[i] = row
+        return np.stack([self.cache[int(i)] for i in idx]).reshape(len(idx), len(self.tasks))
+
+
+def _robot_task_distances(
+    passable: BoolGrid, fields: list[RobotField], robots_rc: NDArray[np.int32], tasks_rc: NDArray[np.int32]
+) -> NDArray[np.float64]:
+    """``(n, m)`` robot-to-task distances read off the robots' fields; on near/far fields, the tasks the
+    coarse grid leaves at ``inf`` are searched exactly from the robots (one search per robot, stopped at
+    them) and noted in the fields' ``known`` for the rest of the decision."""
+    d = np.stack([distances_at(f, tasks_rc) for f in fields])
+    missing = np.flatnonzero(~np.isfinite(d).all(axis=0))
+    near_far = [f for f in fields if isinstance(f, NearFarField)]
+    if len(missing) == 0 or len(near_far) < len(fields):
+        return d
+    exact = distance_matrix(passable, robots_rc, tasks_rc[missing])
+    for f, row_d, row_e in zip(near_far, d, exact, strict=True):
+        for j, v in zip(missing, row_e, strict=True):
+            if not np.isfinite(row_d[j]):
+                row_d[j] = v
+                f.known[(int(tasks_rc[j, 0]), int(tasks_rc[j, 1]))] = float(v)
+    return d
 
 
 @dataclass
@@ -442,7 +554,9 @@ class CoScanPipeline(ExplorationPipeline):
     robots by the Hungarian algorithm on geodesic distance, tasks visited in a 2-opt tour.
 
     Tasks come from F_un components of at least ``min_cluster_size`` cells (the other strategies' noise
-    rule), so every strategy ends on the same frontiers.
+    rule), so every strategy ends on the same frontiers. Where the known passable box holds more than
+    ``far_above_cells`` (the KTH floors at 0.05 m), distances beyond ``exact_radius_m`` are estimated as
+    for every other strategy, and only the task-to-task rows Lloyd reads are searched.
     """
 
     coscan: CoScanConfig = field(default_factory=CoScanConfig)
@@ -456,26 +570,29 @@ class CoScanPipeline(ExplorationPipeline):
         if len(tasks) == 0:
             return CandidateSet(Clusters.empty(), "no_frontiers")
         passable = q.state == CellState.FREE
-        d_robots = np.stack([distances_at(f, tasks) for f in q.fields()])
+        d_robots = _robot_task_distances(passable, q.fields(), q.robots_rc, tasks)
         keep = cap_tasks(d_robots.min(axis=0), self.coscan.tasks_per_robot * n)
         if len(keep) == 0:
             return CandidateSet(Clusters.empty(), "no_reachable_frontiers")
         tasks, d_robots = tasks[keep], d_robots[:, keep]
-        d_tasks = distance_matrix(passable, tasks, tasks)
-        d_tasks = np.minimum(d_tasks, d_tasks.T)  # equal up to float rounding; keep it symmetric
-        lloyd = lloyd_clusters(
-            tasks, d_tasks, d_robots, self.coscan.delta_m / q.resolution_m, self.coscan.max_iterations
-        )
+        rows: TaskRows
+        if q.far is None:
+            d_tasks = distance_matrix(passable, tasks, tasks)
+            d_tasks = np.minimum(d_tasks, d_tasks.T)  # equal up to float rounding; keep it symmetric
+            rows = matrix_rows(d_tasks)
+        else:
+            rows = _NearFarRows(passable, tasks, q.far)
+        lloyd = lloyd_clusters(tasks, rows, d_robots, self.coscan.delta_m / q.resolution_m, self.coscan.max_iterations)
         sizes = np.bincount(lloyd.labels, minlength=len(lloyd.centroids)).astype(np.int32)
         clusters = Clusters(tasks[lloyd.centroids], sizes, tasks, lloyd.labels.astype(np.int32))
-        return CandidateSet(clusters, context=_CoScanTasks(tasks, d_robots, d_tasks, lloyd.labels))
+        return CandidateSet(clusters, context=_CoScanTasks(tasks, d_robots, rows, lloyd.labels, passable, q.far))
 
     def route(self, i: int, k: int, problem: AssignmentProblem, work: _Posed) -> NDArray[np.int32]:
         """The cluster's tasks in a 2-opt tour from the robot."""
         assert work.candidates is not None
         c: _CoScanTasks = work.candidates.context
         members = np.flatnonzero(c.labels == k)
-        order = two_opt_tour(c.d_robots[i, members], c.d_tasks[np.ix_(members, members)])
+        order = two_opt_tour(c.d_robots[i, members], c.between(members))
         return c.tasks_rc[members[order]]
 
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
-from conftest import state_grid
+import pytest
+from conftest import bool_grid, state_grid
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -31,6 +32,21 @@ def test_lloyd_splits_a_cluster_wider_than_delta() -> None:
     res = lloyd_clusters(pts, d, dr, delta_cells=2)
     assert res.labels.tolist() == [0, 0, 0, 1, 1, 1]
     assert res.centroids.tolist() == [1, 4] and res.iterations == 3
+
+
+def test_lloyd_reads_only_its_centroids_rows_when_given_rows_on_demand() -> None:
+    # The same trace as above: centroid x=2, split-off x=5, then x=1 and x=4. Tasks 0 and 3 are never
+    # centroids, so their rows are never searched (a large map searches rows on demand).
+    pts, d, dr = line([0, 1, 2, 3, 4, 5], [-1])
+    read: set[int] = set()
+
+    def rows(idx: np.ndarray) -> np.ndarray:
+        read.update(int(i) for i in idx)
+        return d[idx]
+
+    res = lloyd_clusters(pts, rows, dr, delta_cells=2)
+    assert res.labels.tolist() == [0, 0, 0, 1, 1, 1] and res.centroids.tolist() == [1, 4]
+    assert read == {1, 2, 4, 5}
 
 
 def test_lloyd_merges_a_singleton_within_delta_when_clusters_outnumber_robots() -> None:
@@ -150,3 +166,113 @@ def test_a_new_strategy_supplies_candidates_without_touching_the_decision() -> N
     assert d.done_reason is None
     assert d.goals_rc.tolist() == [[1, 7], [1, 1]]  # each robot to the nearer cell
     assert d.paths[0][0].tolist() == [2, 6] and d.paths[0][-1].tolist() == [1, 7]
+
+
+def test_near_far_coscan_decides_a_long_corridor_as_the_exact_one_does() -> None:
+    # A corridor 39 cells long, unknown at both ends, one robot near the left end: tasks at both ends,
+    # farther apart than delta (2 m = 10 cells at 0.2 m), so two clusters; the robot takes the nearer.
+    # With every grid treated as large (far_above_cells 0), an exact radius of 5 cells and blocks of 2,
+    # the right end's distances are estimates and only centroid rows are searched: the same decision.
+    from mrexplore.config import GlobalPlanningConfig
+    from mrexplore.paths.far_field import NearFarField
+
+    state = state_grid("#" * 41 + "\n" + ("?" + "." * 39 + "?\n") * 3 + "#" * 41)
+    robots = np.array([[2, 8]], np.int32)
+    far_cfg = GlobalPlanningConfig(far_above_cells=0, exact_radius_m=1.0, coarse_cell_m=0.4)
+    exact, far = make_strategy("coscan"), make_strategy("coscan", far_cfg)
+    posed = far.pose(state, robots, 0.2)
+    assert posed.work is not None and all(isinstance(f, NearFarField) for f in posed.work.fields)
+    d_exact, d_far = exact.decide(state, robots, 0.2), far.decide(state, robots, 0.2)
+    assert d_far.clusters.members_rc.tolist() == d_exact.clusters.members_rc.tolist() == [[1, 1], [1, 39]]
+    assert d_far.clusters.labels.tolist() == d_exact.clusters.labels.tolist() == [0, 1]
+    assert d_far.goals_rc.tolist() == d_exact.goals_rc.tolist() == [[1, 1]]
+    assert [p.tolist() for p in d_far.paths] == [p.tolist() for p in d_exact.paths]
+
+
+def test_near_far_coscan_tours_a_far_cluster_as_the_exact_one_does() -> None:
+    # Unknown above the left end of a corridor: frontier cells (2, 1..9), tasks 0.5 m (2.5 cells) apart at
+    # columns 1, 4, 7, one cluster round the middle one (each within delta). The robot is 28 cells from
+    # the nearest, beyond the exact radius (5 cells): both tour the cluster from column 7. Near/far
+    # searched one task row, the centroid's (task 1); the tour's distances come from the cluster's box.
+    from mrexplore.config import GlobalPlanningConfig
+
+    state = state_grid("""
+        #########################################
+        #?????????###############################
+        #.......................................#
+        #.......................................#
+        #########################################
+    """)
+    robots = np.array([[3, 35]], np.int32)
+    far_cfg = GlobalPlanningConfig(far_above_cells=0, exact_radius_m=1.0, coarse_cell_m=0.4)
+    exact, far = make_strategy("coscan"), make_strategy("coscan", far_cfg)
+    d_exact = exact.decide(state, robots, 0.2)
+    posed = far.pose(state, robots, 0.2)
+    d_far = far.finish(posed, far.assign(posed))
+    assert d_exact.clusters.members_rc.tolist() == d_far.clusters.members_rc.tolist() == [[2, 1], [2, 4], [2, 7]]
+    assert d_exact.clusters.labels.tolist() == d_far.clusters.labels.tolist() == [0, 0, 0]
+    assert d_exact.routes[0].tolist() == d_far.routes[0].tolist() == [[2, 7], [2, 4], [2, 1]]
+    assert [p.tolist() for p in d_far.paths] == [p.tolist() for p in d_exact.paths]
+    assert posed.work is not None and posed.work.candidates is not None
+    assert sorted(posed.work.candidates.context.rows.cache) == [1]
+
+
+def test_near_far_tour_distances_leave_the_clusters_box_through_near_far_rows() -> None:
+    # Two tasks 4 cells apart either side of a wall open only 11 rows down: the way round (24.8 cells)
+    # leaves the tasks' box grown by the exact radius (2 cells), so both rows come from near/far fields
+    # (blocks of 2 beyond the radius): a real path, not shorter than the exact one; symmetric.
+    from mrexplore.paths.distance_field import distance_matrix
+    from mrexplore.paths.far_field import coarse_grid
+    from mrexplore.strategies import FarDistances, _CoScanTasks, _NearFarRows
+
+    passable = np.ones((14, 7), bool)
+    passable[0:12, 3] = False
+    tasks = np.array([[1, 1], [1, 5]], np.int32)
+    grid = coarse_grid(passable, 2)
+    assert grid is not None
+    far = FarDistances(2, grid)
+    rows = _NearFarRows(passable, tasks, far)
+    context = _CoScanTasks(tasks, np.zeros((1, 2)), rows, np.zeros(2, np.int64), passable, far)
+    d = context.between(np.array([0, 1]))
+    exact = distance_matrix(passable, tasks, tasks)[0, 1]
+    assert round(exact, 3) == 24.828 and d[0, 1] == d[1, 0] == 28.0 and d[0, 0] == 0.0
+    assert sorted(rows.cache) == [0, 1]
+
+
+def test_near_far_rows_and_robot_distances_fall_back_to_exact_searches_behind_a_narrow_gap() -> None:
+    # A one-cell gap in a wall closes every 3 x 3 block round it: the coarse grid cannot cross it, so
+    # the near/far fields (exact radius 4) leave the far side at inf. Task 0 at (0, 0), task 1 at
+    # (0, 12) across the wall (2 cells in, beyond the radius), task 2 at (0, 19): the rows and the robot's
+    # distances come back exact from searches. Tasks 1 and 2, 7 cells apart on the same side, read each
+    # other's estimate: 5 + 2 sqrt(2) round the blocks, never shorter than the exact 7.
+    from mrexplore.paths.distance_field import distance_matrix
+    from mrexplore.paths.far_field import coarse_grid, far_fields
+    from mrexplore.strategies import FarDistances, _NearFarRows, _robot_task_distances
+
+    passable = ~bool_grid("""
+        ..........#.........
+        ..........#.........
+        ..........#.........
+        ....................
+        ..........#.........
+        ..........#.........
+    """)
+    tasks = np.array([[0, 0], [0, 12], [0, 19]], np.int32)
+    grid = coarse_grid(passable, 3)
+    assert grid is not None
+    far = FarDistances(4, grid)
+    exact = distance_matrix(passable, tasks, tasks)
+    rows = _NearFarRows(passable, tasks, far)
+    got = rows(np.array([0, 1, 2]))
+    assert np.isinf(rows.raw[0][1:]).all()  # task 0's own field cannot see past the gap
+    np.testing.assert_allclose(got[0], exact[0], rtol=1e-6)  # filled by searches: exact
+    assert got[1, 2] == pytest.approx(7.828427, abs=1e-5) and got[2, 1] == pytest.approx(7.828427, abs=1e-5)
+    assert exact[1, 2] == 7.0
+    robots = np.array([[5, 0]], np.int32)
+    fields = far.fields(passable, robots)
+    d = _robot_task_distances(passable, list(fields), robots, tasks)
+    from_robot = distance_matrix(passable, robots, tasks)[0]
+    np.testing.assert_allclose(d[0, 1:], from_robot[1:], rtol=1e-6)  # past the gap: searched exactly
+    assert d[0, 0] >= from_robot[0] == 5.0  # 5 cells, beyond the radius: the blocks' estimate
+    assert fields[0].value(0, 19) == pytest.approx(d[0, 2])  # noted in the field for the paths
+    assert far_fields(passable, robots, 4, 3)[0].value(0, 19) == np.inf

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from mrexplore.paths.astar import path_length_cells
 from mrexplore.paths.distance_field import _Searches, distance_fields
-from mrexplore.paths.far_field import Field, NearFarField, _seeded_search, far_fields, path_to
+from mrexplore.paths.far_field import Field, NearFarField, _seeded_search, coarse_grid, far_fields, path_to
 
 
 def random_rooms(seed: int, shape: tuple[int, int] = (60, 80), walls: int = 12) -> np.ndarray:
@@ -133,3 +133,17 @@ def test_exact_fields_read_through_path_to_as_before() -> None:
     assert isinstance(exact, Field)
     assert path_to(exact, g, (0, 0), (0, 7)).tolist()[-1] == [0, 7]
     assert not isinstance(exact, NearFarField)
+
+
+def test_a_shared_coarse_grid_gives_the_fields_a_grid_of_their_own_does() -> None:
+    g = random_rooms(5)
+    sources = np.argwhere(g)[[0, 500, 2000]]
+    cells = np.argwhere(g)
+    grid = coarse_grid(g, 3)
+    assert grid is not None
+    shared = far_fields(g, sources, radius_cells=12, factor=3, grid=grid)
+    alone = far_fields(g, sources, radius_cells=12, factor=3)
+    for a, b in zip(shared, alone, strict=True):
+        np.testing.assert_array_equal(a.at(cells), b.at(cells))
+    with pytest.raises(ValueError, match=r"grid was pooled by 3 from a \(60, 80\) grid; pool this one by 2"):
+        far_fields(g, sources, radius_cells=12, factor=2, grid=grid)

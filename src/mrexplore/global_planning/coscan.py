@@ -6,6 +6,7 @@ Pure functions on distance matrices; the pipeline that feeds them is ``strategie
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -13,7 +14,20 @@ from numpy.typing import NDArray
 
 from mrexplore.global_planning.tours import open_tour
 
-__all__ = ["sample_tasks", "cap_tasks", "lloyd_clusters", "LloydResult", "two_opt_tour", "tour_length"]
+__all__ = [
+    "sample_tasks",
+    "cap_tasks",
+    "lloyd_clusters",
+    "LloydResult",
+    "TaskRows",
+    "matrix_rows",
+    "two_opt_tour",
+    "tour_length",
+]
+
+TaskRows = Callable[[NDArray[np.int64]], NDArray[np.float64]]
+"""Rows of the task-to-task distances on demand: ``rows(idx)`` is ``(len(idx), m)``, from the tasks ``idx`` to
+every task (on a large map the strategy searches only the rows Lloyd reads: its centroids')."""
 
 
 def sample_tasks(frontier_rc: NDArray[np.integer], spacing_cells: float) -> NDArray[np.int32]:
@@ -74,9 +88,24 @@ def _snap(members: NDArray[np.int64], task_rc: NDArray[np.floating]) -> int:
     return int(members[np.argmin(((task_rc[members] - mean) ** 2).sum(axis=1))])
 
 
+def matrix_rows(matrix: NDArray[np.float64]) -> TaskRows:
+    """:data:`TaskRows` of a whole matrix.
+
+    Examples
+    --------
+    >>> matrix_rows(np.array([[0.0, 2.0], [2.0, 0.0]]))(np.array([1])).tolist()
+    [[2.0, 0.0]]
+    """
+
+    def rows(idx: NDArray[np.int64]) -> NDArray[np.float64]:
+        return matrix[idx]
+
+    return rows
+
+
 def lloyd_clusters(
     task_rc: NDArray[np.integer],
-    d_tasks: NDArray[np.floating],
+    d_tasks: NDArray[np.floating] | TaskRows,
     d_robots: NDArray[np.floating],
     delta_cells: float,
     max_iterations: int = 10,
@@ -95,12 +124,14 @@ def lloyd_clusters(
     task_rc:
         ``(m, 2)`` task cells.
     d_tasks:
-        ``(m, m)`` geodesic distances between tasks, cells.
+        ``(m, m)`` geodesic distances between tasks, cells; or :data:`TaskRows` giving its rows on demand
+        (only centroids' rows are read).
     d_robots:
         ``(n, m)`` geodesic distances robot -> task, cells (finite for every task).
     """
     pts = np.asarray(task_rc, dtype=np.float64)
     n_robots, m = d_robots.shape
+    rows = d_tasks if callable(d_tasks) else matrix_rows(np.asarray(d_tasks, dtype=np.float64))
     if m == 0:
         return LloydResult(np.zeros(0, np.int64), np.zeros(0, np.int64), 0)
     centroid_dist = np.asarray(d_robots, dtype=np.float64)  # (k, m): rows are centroids
@@ -114,23 +145,27 @@ def lloyd_clusters(
         groups = [g for g in groups if len(g)]
         # Split: a cluster reaching farther than delta from its centroid gives its farthest task away.
         for c, g in zip(list(new), groups, strict=True):
-            far = g[np.argmax(d_tasks[c, g])]
-            if d_tasks[c, far] > delta_cells:
+            row = rows(np.array([c]))[0]
+            far = g[np.argmax(row[g])]
+            if row[far] > delta_cells:
                 new.append(int(far))
         # Merge: while clusters outnumber robots, a singleton within delta of another centroid joins it.
         sizes = {c: len(g) for c, g in zip(new, groups, strict=False)}
         for c in list(new):
             if len(new) <= n_robots:
                 break
-            if sizes.get(c, 0) == 1 and any(d_tasks[c, o] <= delta_cells for o in new if o != c):
+            if sizes.get(c, 0) != 1:
+                continue
+            row = rows(np.array([c]))[0]
+            if any(row[o] <= delta_cells for o in new if o != c):
                 new.remove(c)
         new = sorted(set(new))
         if centroids is not None and new == centroids:
             break
         centroids = new
-        centroid_dist = d_tasks[np.asarray(centroids)]
+        centroid_dist = rows(np.asarray(centroids, np.int64))
     assert centroids is not None
-    labels = np.argmin(d_tasks[np.asarray(centroids)], axis=0)
+    labels = np.argmin(rows(np.asarray(centroids, np.int64)), axis=0)
     used = np.unique(labels)
     remap = np.full(len(centroids), -1, dtype=np.int64)
     remap[used] = np.arange(len(used))
