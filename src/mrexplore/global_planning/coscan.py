@@ -1,7 +1,8 @@
 """CoScan-2D (Dong et al., SIGGRAPH 2019) on the grid: frontier tasks, robot-seeded geodesic Lloyd
 clustering with split and merge, Hungarian assignment, and a 2-opt tour per robot.
 
-Pure functions on distance matrices; the pipeline that feeds them is ``strategies.CoScanPipeline``.
+Pure functions on distance matrices (or, on large maps, their rows searched on demand: :data:`TaskRows`);
+the pipeline that feeds them is ``strategies.CoScanPipeline``.
 """
 
 from __future__ import annotations
