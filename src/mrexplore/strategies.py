@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
-from mrexplore.boxes import Box, mask_box
+from mrexplore.boxes import Box, grown_slices, mask_box
 from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig, SimConfig
 from mrexplore.global_planning.classical import GeodesicPlanner, NearestPlanner, UtilityPlanner
 from mrexplore.global_planning.coscan import (
@@ -162,9 +162,11 @@ class CandidateQuery:
     """Frontier cells that stopped being candidates (stood on without resolving them; stalled goals)."""
     robots_rc: NDArray[np.int32]
     """``(n_robots, 2) int32`` the cells of the robots assigned to."""
-    fields: Callable[[], list[RobotField]]
-    """Each robot's distances on the planning grid, computed once, on the first call: whole exact fields,
-    or near/far fields where :attr:`far` is set."""
+    fields: Callable[..., list[RobotField]]
+    """``fields(read_rc=None)``: each robot's distances on the planning grid, computed once, on the first
+    call: whole exact fields, or near/far fields where :attr:`far` is set, which answer the ``(k, 2)`` cells
+    ``read_rc`` that their coarse grid leaves at ``inf`` by an exact search from the robot (``own_rc`` of
+    :func:`~mrexplore.paths.far_field.far_fields`)."""
     current: Sequence[NDArray[np.int32]] | None
     """Each robot's current route (its goal first; empty for none)."""
     resolution_m: float
@@ -334,12 +336,13 @@ class ExplorationPipeline:
         computed: list[list[RobotField]] = []
         box, far = self._extent(passable, resolution_m)
 
-        def fields_now() -> list[RobotField]:
+        def fields_now(read_rc: NDArray[np.int32] | None = None) -> list[RobotField]:
             if not computed:
                 if far is None:
                     computed.append(list(distance_fields(passable, robots_rc)))
                 else:
-                    computed.append(list(far.fields(passable, robots_rc)))
+                    own = None if read_rc is None else [read_rc] * len(robots_rc)
+                    computed.append(list(far.fields(passable, robots_rc, own_rc=own)))
             return computed[0]
 
         cand = self.candidates(
@@ -480,10 +483,9 @@ class _CoScanTasks:
         if self.far is None:
             return self.rows(members)[:, members]
         pts = self.tasks_rc[members].astype(np.int64)
-        margin = self.far.radius_cells
-        r0, c0 = np.maximum(pts.min(axis=0) - margin, 0)
-        r1, c1 = np.minimum(pts.max(axis=0) + margin + 1, self.passable.shape)
-        d = pairwise_distances(self.passable[r0:r1, c0:c1], pts - (r0, c0))
+        (r0, c0), (r1, c1) = pts.min(axis=0), pts.max(axis=0) + 1
+        rows, cols = grown_slices((r0, r1, c0, c1), self.far.radius_cells, self.passable.shape)
+        d = pairwise_distances(self.passable[rows, cols], pts - (rows.start, cols.start))
         gone = ~np.isfinite(d)
         if gone.any():  # a way round outside the box (d is symmetric, so both ends of a pair are here)
             lost = np.flatnonzero(gone.any(axis=1))
@@ -528,26 +530,6 @@ class _NearFarRows:
         return np.stack([self.cache[int(i)] for i in idx]).reshape(len(idx), len(self.tasks))
 
 
-def _robot_task_distances(
-    passable: BoolGrid, fields: list[RobotField], robots_rc: NDArray[np.int32], tasks_rc: NDArray[np.int32]
-) -> NDArray[np.float64]:
-    """``(n, m)`` robot-to-task distances read off the robots' fields; on near/far fields, the tasks the
-    coarse grid leaves at ``inf`` are searched exactly from the robots (one search per robot, stopped at
-    them) and noted in the fields' ``known`` for the rest of the decision."""
-    d = np.stack([distances_at(f, tasks_rc) for f in fields])
-    missing = np.flatnonzero(~np.isfinite(d).all(axis=0))
-    near_far = [f for f in fields if isinstance(f, NearFarField)]
-    if len(missing) == 0 or len(near_far) < len(fields):
-        return d
-    exact = distance_matrix(passable, robots_rc, tasks_rc[missing])
-    for f, row_d, row_e in zip(near_far, d, exact, strict=True):
-        for j, v in zip(missing, row_e, strict=True):
-            if not np.isfinite(row_d[j]):
-                row_d[j] = v
-                f.known[(int(tasks_rc[j, 0]), int(tasks_rc[j, 1]))] = float(v)
-    return d
-
-
 @dataclass
 class CoScanPipeline(ExplorationPipeline):
     """CoScan-2D: frontier tasks clustered by robot-seeded geodesic Lloyd iterations, clusters matched to
@@ -570,7 +552,7 @@ class CoScanPipeline(ExplorationPipeline):
         if len(tasks) == 0:
             return CandidateSet(Clusters.empty(), "no_frontiers")
         passable = q.state == CellState.FREE
-        d_robots = _robot_task_distances(passable, q.fields(), q.robots_rc, tasks)
+        d_robots = np.stack([distances_at(f, tasks) for f in q.fields(tasks)])
         keep = cap_tasks(d_robots.min(axis=0), self.coscan.tasks_per_robot * n)
         if len(keep) == 0:
             return CandidateSet(Clusters.empty(), "no_reachable_frontiers")

@@ -247,7 +247,7 @@ def test_near_far_rows_and_robot_distances_fall_back_to_exact_searches_behind_a_
     # other's estimate: 5 + 2 sqrt(2) round the blocks, never shorter than the exact 7.
     from mrexplore.paths.distance_field import distance_matrix
     from mrexplore.paths.far_field import coarse_grid, far_fields
-    from mrexplore.strategies import FarDistances, _NearFarRows, _robot_task_distances
+    from mrexplore.strategies import FarDistances, _NearFarRows
 
     passable = ~bool_grid("""
         ..........#.........
@@ -269,8 +269,8 @@ def test_near_far_rows_and_robot_distances_fall_back_to_exact_searches_behind_a_
     assert got[1, 2] == pytest.approx(7.828427, abs=1e-5) and got[2, 1] == pytest.approx(7.828427, abs=1e-5)
     assert exact[1, 2] == 7.0
     robots = np.array([[5, 0]], np.int32)
-    fields = far.fields(passable, robots)
-    d = _robot_task_distances(passable, list(fields), robots, tasks)
+    fields = far.fields(passable, robots, own_rc=[tasks])  # what CoScan's candidates ask for
+    d = np.stack([f.at(tasks) for f in fields])
     from_robot = distance_matrix(passable, robots, tasks)[0]
     np.testing.assert_allclose(d[0, 1:], from_robot[1:], rtol=1e-6)  # past the gap: searched exactly
     assert d[0, 0] >= from_robot[0] == 5.0  # 5 cells, beyond the radius: the blocks' estimate
