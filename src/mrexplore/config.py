@@ -564,16 +564,23 @@ class TrainConfig(_Checked):
     """Validation episodes per evaluation: half held-out training DungeonMaps, half held-out floor plans, >= 1
     (32 in the first shipped run: the stage it kept was 9.7% ahead there and tied the heuristic on the dev
     set, so selection needs more maps)."""
+    score: str = "steps"
+    """How the policy search ranks its vectors and validation picks the stage kept: ``steps`` (mean steps
+    to the end, the largest maps weighing most) or ``relative`` (every episode weighing the same: the
+    geometric mean over episodes of its steps to the end plus to 99% coverage, over those of the
+    generation's current weights in the search and of the heuristic in validation; see
+    :func:`~mrexplore.global_planning.learned.search.relative_score`)."""
     # -- policy search on the linear edge path (cross-entropy method)
     search_generations: int = 6
     """Generations of the cross-entropy search over the residual's linear edge weights (one per edge
     feature), before imitation, >= 0: each draws ``search_population`` weight vectors around the current
     ones (the current ones among them), runs every vector on the same ``search_episodes`` training
-    episodes, and moves to the mean and spread of the ``search_elites`` with the fewest steps."""
+    episodes, and moves to the mean and spread of the ``search_elites`` that score best (``score``)."""
     search_population: int = 8
     """Weight vectors tried per generation, >= 2 (the current mean is one of them)."""
     search_elites: int = 3
-    """Vectors with the fewest mean steps that set the next mean and spread, in [1, search_population]."""
+    """Vectors with the best score (fewest mean steps by default) that set the next mean and spread, in [1,
+    search_population]."""
     search_episodes: int = 48
     """Training episodes each vector of a generation runs (the same ones for every vector), >= 1."""
     search_sigma: float = 5.0
@@ -647,6 +654,7 @@ class TrainConfig(_Checked):
         _require(0 <= self.generated_share <= 1, "generated_share", "in [0, 1]", self.generated_share)
         _require(self.plans in ("varied", "generated"), "plans", "'varied' or 'generated'", self.plans)
         _require(self.val_maps >= 1, "val_maps", ">= 1", self.val_maps)
+        _require(self.score in ("steps", "relative"), "score", "'steps' or 'relative'", self.score)
         for name in ("search_generations", "dagger_rounds", "noisy_candidates", "ppo_iterations"):
             _require(getattr(self, name) >= 0, name, ">= 0", getattr(self, name))
         for name in (

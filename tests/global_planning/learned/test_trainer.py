@@ -80,6 +80,35 @@ def test_policy_search_moves_the_edge_weights_to_its_elites_and_resumes(tmp_path
     assert kept.meta["meta"]["stage"] == second.best_stage
 
 
+def test_relative_score_is_against_the_heuristic_and_picks_the_stage_kept(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    cfg = replace(TINY, search_generations=2, search_population=3, search_elites=1, search_episodes=1)
+    cfg = replace(cfg, dagger_rounds=0, ppo_iterations=0, val_maps=2, score="relative")
+    run = train(cfg, tmp_path / "run", None, workers=1, seed=5)
+    scores = [r["val_score"] for r in run.stages]
+    assert [r["stage"] for r in run.stages] == ["baseline", "search0", "search1"]
+    assert scores[0] == 1.0  # the heuristic against itself
+    assert run.best_stage == run.stages[min(range(3), key=lambda i: (scores[i], i))]["stage"]
+    assert [float(r["val_score"]) for r in _rows(tmp_path / "run" / "stages.csv")] == pytest.approx(scores)
+    with pytest.raises(MrExploreError, match=r"score must be 'steps' or 'relative', got 'ratio'"):
+        replace(cfg, score="ratio")
+
+
+def test_validate_policy_gives_steps_to_the_end_and_to_99_per_map_in_order(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    from mrexplore.global_planning.learned.trainer import FRESH_SEED0, validate_policy
+
+    maps = [f"varied:{FRESH_SEED0 + i}" for i in (1, 0)]
+    got_maps, steps, cov = validate_policy(None, replace(TINY, max_steps=400), None, workers=2, maps=maps)
+    assert got_maps == maps and steps.shape == (2, 2) and cov.shape == (2,)
+    assert (steps[1] <= steps[0]).all() and (cov >= 0.99).all()  # both explored: 99% comes before the end
+    # an episode's seed is its position: the first map alone runs the same episode again
+    alone = validate_policy(None, replace(TINY, max_steps=400), None, workers=1, maps=maps[:1])[1]
+    assert alone[:, 0].tolist() == steps[:, 0].tolist()
+
+
 def test_a_budget_under_one_search_generation_skips_the_search(tmp_path: Path) -> None:
     from dataclasses import replace
 

@@ -54,25 +54,29 @@ from mrexplore.global_planning.learned.policy import (
     sequential_log_prob,
 )
 from mrexplore.global_planning.learned.ppo import PPOStats, gae, listwise_loss, ppo_loss
-from mrexplore.global_planning.learned.search import cross_entropy_step, search_candidates
+from mrexplore.global_planning.learned.search import cross_entropy_step, relative_score, search_candidates
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission
+from mrexplore.sim.measures import steps_to_coverage
 from mrexplore.strategies import ExplorationPipeline, NcmPipeline, make_strategy
 from mrexplore.threads import THREADS_ENV
 from mrexplore.types import MrExploreError
 from mrexplore.workers import stop_pool, worker_pool
 
-__all__ = ["train", "validate_policy", "TrainResult", "split_maps", "LOG_COLUMNS"]
+__all__ = ["train", "validate_policy", "TrainResult", "split_maps", "LOG_COLUMNS", "FRESH_SEED0"]
 
 LOG_COLUMNS = [
     "time_s", "stage", "episodes", "decisions", "labels", "loss", "expert_agreement", "expert_gain", "kl",
     "clip_fraction", "entropy", "value_loss", "return_mean", "steps_mean", "coverage_mean", "val_steps_mean",
-    "val_coverage_mean", "val_sampled_steps_mean", "val_sampled_coverage_mean", "decisions_per_s",
+    "val_coverage_mean", "val_score", "val_sampled_steps_mean", "val_sampled_coverage_mean", "decisions_per_s",
     "search_best_steps", "edge_weights",
 ]  # fmt: skip
 _VAL_SEED0 = 1_000_000
 """Procedural validation plans use seeds from here; training plans draw seeds below it."""
+FRESH_SEED0 = 2_000_000
+"""Procedural plans from this seed on are never trained or validated on (validation takes ``val_maps``
+seeds from ``_VAL_SEED0``): a test split of the training distribution that no run picked a stage on."""
 _BATCH = 64
 
 
@@ -170,8 +174,10 @@ def _mission(job: _Job, pipeline: ExplorationPipeline) -> Mission:
 
 
 def _episode_stats(m: Mission, decisions: int) -> dict[str, float]:
+    s99 = steps_to_coverage(np.asarray(m.curve), 0.99)
     return {
         "steps": m.steps,
+        "steps_99": m.steps if s99 is None else s99,  # never there: all its steps, as the bench report counts
         "coverage": m.sim.coverage,
         "decisions": decisions,
         "done": float(m.done_reason != "max_steps"),
@@ -594,25 +600,29 @@ def _search_generation(
     net.set_edge_weights(cands[0])
     results = run(jobs)
     steps = np.full((len(cands), n), np.nan)
+    steps_99 = np.full((len(cands), n), np.nan)
     coverage = np.full((len(cands), n), np.nan)
     decisions = 0
     for r in results:
         c, e = divmod(int(r["index"]), n)
-        steps[c, e], coverage[c, e] = r["steps"], r["coverage"]
+        steps[c, e], steps_99[c, e], coverage[c, e] = r["steps"], r["steps_99"], r["coverage"]
         decisions += int(r["decisions"])
     st.episodes += len(results)
     common = np.isfinite(steps).all(axis=0)
     if not common.any():
         return {}
     mean_steps = steps[:, common].mean(axis=1)
-    new_mean, new_sigma = cross_entropy_step(cands, mean_steps, cfg.search_elites, cfg.search_sigma_min)
+    score = mean_steps
+    if cfg.score == "relative":  # against the current weights (candidate 0) on each episode
+        score = relative_score(steps[:, common], steps_99[:, common], steps[0, common], steps_99[0, common])
+    new_mean, new_sigma = cross_entropy_step(cands, score, cfg.search_elites, cfg.search_sigma_min)
     net.set_edge_weights(new_mean)
     st.search_sigma = [float(v) for v in new_sigma]
     return {
         "decisions": decisions,
         "steps_mean": float(mean_steps[0]),
         "coverage_mean": float(coverage[0, common].mean()),
-        "search_best_steps": float(mean_steps.min()),
+        "search_best_steps": float(mean_steps[np.argmin(score)]),
         "edge_weights": " ".join(f"{v:.3f}" for v in new_mean),
     }
 
@@ -641,6 +651,9 @@ class _State:
     stage_rows: list[dict[str, Any]] = field(default_factory=list)
     search_sigma: list[float] | None = None
     """The policy search's spread per edge weight after the last generation (None: none ran yet)."""
+    val_ref: list[list[float]] | None = None
+    """The baseline stage's steps to the end and to 99% per validation map, in order (``score``
+    ``relative`` compares every later stage with them; None: not run yet)."""
     log_rows: int = -1
     """Rows of log.csv when the state was saved (a resumed run drops later ones: it writes them again);
     -1: not recorded (a state from before this field), keep every row."""
@@ -803,10 +816,12 @@ def train(
         def budget_left(n: int) -> int:
             return n if episodes is None else max(0, min(n, episodes - st.episodes))
 
-        def validate(weights: bytes | None, kind: str = "eval") -> tuple[float, float]:
+        def validate(weights: bytes | None, kind: str = "eval") -> tuple[float, float, np.ndarray]:
+            """Mean steps and coverage, and the steps to the end and to 99% per map (2 x maps, in order)."""
             jobs = placed([_Job(kind, m, 3, i, weights, cfg) for i, m in enumerate(val_maps)])
-            res = list(runner.run(jobs, math.inf))
-            return float(np.mean([r["steps"] for r in res])), float(np.mean([r["coverage"] for r in res]))
+            res = runner.results(jobs, math.inf)
+            per_map = np.array([[r["steps"] for r in res], [r["steps_99"] for r in res]], dtype=np.float64)
+            return float(per_map[0].mean()), float(np.mean([r["coverage"] for r in res])), per_map
 
         while st.stage < len(stages):
             stage = stages[st.stage]
@@ -872,12 +887,19 @@ def train(
             # validate (deterministic decoding, held-out maps) and keep the best
             # (hier's baseline is the heuristic, which None weights select; NCM's is its untrained network)
             weights = None if stage == "baseline" and cfg.strategy == "hier" else _weights(net)
-            row["val_steps_mean"], row["val_coverage_mean"] = validate(weights)
+            row["val_steps_mean"], row["val_coverage_mean"], per_map = validate(weights)
             chosen_by = "val_steps_mean"
+            if cfg.score == "relative":  # against the baseline stage (the heuristic for hier), map by map
+                if stage == "baseline":
+                    st.val_ref = per_map.tolist()
+                ref = np.asarray(st.val_ref)
+                row["val_score"] = float(relative_score(per_map[0], per_map[1], ref[0], ref[1]))
+                chosen_by = "val_score"
+            cov_key = "val_coverage_mean"
             if cfg.strategy == "ncm":  # NCM's own evaluation samples: validate that too (seeded per map)
-                row["val_sampled_steps_mean"], row["val_sampled_coverage_mean"] = validate(weights, "eval-sampled")
-                chosen_by = "val_sampled_steps_mean" if cfg.ncm.select == "sampled" else chosen_by
-            cov_key = chosen_by.replace("steps", "coverage")
+                row["val_sampled_steps_mean"], row["val_sampled_coverage_mean"], _ = validate(weights, "eval-sampled")
+                if cfg.ncm.select == "sampled":
+                    chosen_by, cov_key = "val_sampled_steps_mean", "val_sampled_coverage_mean"
             if stage == "baseline" or (
                 row[chosen_by] < st.best_val and row[cov_key] >= st.stage_rows[0][cov_key] - 0.005
             ):
@@ -904,16 +926,19 @@ def train(
                         "expert_agreement",
                         "val_steps_mean",
                         "val_coverage_mean",
+                        "val_score",
                         "val_sampled_steps_mean",
                         "val_sampled_coverage_mean",
                         "edge_weights",
                         "time_s",
                     )
-                    if k in row or not k.startswith("val_sampled")
+                    if k in row or not k.startswith(("val_sampled", "val_score"))
                 }
             )
             log.row(row, st.stage)
             val = f"{row['val_steps_mean']:.1f} steps, coverage {row['val_coverage_mean']:.4f}"
+            if "val_score" in row:
+                val += f", score {row['val_score']:.4f} (the heuristic's: 1)"
             if "val_sampled_steps_mean" in row:
                 val += f"; sampled {row['val_sampled_steps_mean']:.1f} steps, {row['val_sampled_coverage_mean']:.4f}"
             say(f"{stage}: validation {val} ({elapsed:.0f} s)")
@@ -941,11 +966,12 @@ def train(
 
 
 def validate_policy(
-    policy: Path | None, cfg: TrainConfig, train_dir: Path | None, workers: int = 0
-) -> tuple[float, float, list[int]]:
-    """Mean validation steps and coverage (and the steps per validation map, in order) of a policy file
-    (None: the heuristic, hier-heuristic; for ``cfg.strategy`` ncm, the shipped NCM policy) on ``cfg``'s
-    validation maps: to compare runs on one set."""
+    policy: Path | None, cfg: TrainConfig, train_dir: Path | None, workers: int = 0, maps: list[str] | None = None
+) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """A policy file on ``cfg``'s validation maps (or on ``maps``), to compare runs on one set: the maps,
+    in order, then ``(2, maps)`` steps to the end and to 99% coverage (all its steps where an episode never
+    got there), and each map's final coverage. ``policy`` None: the heuristic, hier-heuristic (for
+    ``cfg.strategy`` ncm, the shipped NCM policy)."""
     from mrexplore.global_planning.learned.checkpoint import load_ncm_policy, load_policy
 
     weights = None
@@ -955,12 +981,11 @@ def validate_policy(
         weights = _weights(both)
     elif policy is not None:
         weights = _weights(load_policy(policy).net)
-    _, val_maps = split_maps(train_dir, cfg.val_maps, cfg.plans)
+    val_maps = maps if maps is not None else split_maps(train_dir, cfg.val_maps, cfg.plans)[1]
     with _Runner(workers, None) as runner:
-        jobs = [_Job("eval", m, 3, i, weights, cfg) for i, m in enumerate(val_maps)]
-        res = {r["map"]: r for r in runner.run(jobs, math.inf)}  # they come as they finish
-    steps = [int(res[m]["steps"]) for m in val_maps]
-    return float(np.mean(steps)), float(np.mean([r["coverage"] for r in res.values()])), steps
+        res = runner.results([_Job("eval", m, 3, i, weights, cfg) for i, m in enumerate(val_maps)], math.inf)
+    steps = np.array([[r["steps"] for r in res], [r["steps_99"] for r in res]], dtype=np.float64)
+    return val_maps, steps, np.array([r["coverage"] for r in res], dtype=np.float64)
 
 
 def _collect_row(results: Sequence[dict[str, Any]]) -> dict[str, Any]:
