@@ -95,7 +95,7 @@ def test_relative_score_is_against_the_heuristic_and_picks_the_stage_kept(tmp_pa
         replace(cfg, score="ratio")
 
 
-def test_validate_policy_gives_steps_to_the_end_and_to_99_per_map_in_order(tmp_path: Path) -> None:
+def test_validate_policy_gives_steps_to_the_end_and_to_99_per_map_in_order() -> None:
     from dataclasses import replace
 
     from mrexplore.global_planning.learned.trainer import FRESH_SEED0, validate_policy
