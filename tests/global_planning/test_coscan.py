@@ -6,7 +6,7 @@ import itertools
 
 import numpy as np
 import pytest
-from conftest import bool_grid, state_grid
+from conftest import NARROW_GAP, bool_grid, state_grid
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -249,14 +249,7 @@ def test_near_far_rows_and_robot_distances_fall_back_to_exact_searches_behind_a_
     from mrexplore.paths.far_field import coarse_grid, far_fields
     from mrexplore.strategies import FarDistances, _NearFarRows
 
-    passable = ~bool_grid("""
-        ..........#.........
-        ..........#.........
-        ..........#.........
-        ....................
-        ..........#.........
-        ..........#.........
-    """)
+    passable = ~bool_grid(NARROW_GAP)
     tasks = np.array([[0, 0], [0, 12], [0, 19]], np.int32)
     grid = coarse_grid(passable, 3)
     assert grid is not None

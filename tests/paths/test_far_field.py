@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import bool_grid, seeded_dijkstra
+from conftest import NARROW_GAP, bool_grid, seeded_dijkstra
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -77,14 +77,7 @@ def test_a_thin_wall_is_gone_round_not_through() -> None:
 
 
 def test_a_passage_the_coarse_grid_closes_reads_inf_and_its_path_falls_back_to_an_exact_search() -> None:
-    g = ~bool_grid("""
-        ..........#.........
-        ..........#.........
-        ..........#.........
-        ....................
-        ..........#.........
-        ..........#.........
-    """)
+    g = ~bool_grid(NARROW_GAP)
     f = far_fields(g, np.array([[0, 0]]), radius_cells=4, factor=3)[0]
     assert f.value(0, 19) == math.inf  # the one-cell gap in the wall closes every block around it
     path = path_to(f, g, (0, 0), (0, 19))

@@ -166,7 +166,7 @@ def lloyd_clusters(
         centroids = new
         centroid_dist = rows(np.asarray(centroids, np.int64))
     assert centroids is not None
-    labels = np.argmin(rows(np.asarray(centroids, np.int64)), axis=0)
+    labels = np.argmin(centroid_dist, axis=0)  # the centroids' rows: read when the loop last set them
     used = np.unique(labels)
     remap = np.full(len(centroids), -1, dtype=np.int64)
     remap[used] = np.arange(len(used))
