@@ -227,7 +227,7 @@ class PreprocessConfig(_Checked):
     of frontier or more, until there is one per robot
     (:func:`~mrexplore.preprocessing.clustering.split_for_team`); False: the paper's clusters, robots share.
     On a whole KTH floor at 0.05 m it took 16 robots to 99% coverage in 5,521 steps instead of 8,698; on
-    the dev set it changed none of 408 episodes with 3 robots (README, "Large floors and teams")."""
+    the dev set it changed none of 408 episodes with 3 robots (docs/speed.md, "Large floors and teams")."""
     split_min_frontier_m: float = 12.0
     """Under ``split_for_team``, a cluster is cut only while it holds this many metres of frontier (members
     x cell size) or more, >= 0: at 12, each half keeps about a sensor range (6 m) of it; a shorter frontier
