@@ -1,10 +1,11 @@
 """Policy files side by side on maps no dev set holds, with the heuristic.
 
-    python perf/compare_policies.py POLICY [POLICY ...] [--fresh N] [--workers 2] [--csv PER_MAP.csv]
+    python perf/compare_policies.py POLICY [POLICY ...] [--fresh N] [--robots R] [--workers 2] [--csv PER_MAP.csv]
 
 The maps are those ``mrexplore train`` validates on with the default training config (64: half
 held-out training DungeonMaps, half ``varied:`` plans of validation seeds), or with ``--fresh N`` N
-``varied:`` plans of seeds no run trains or validates on (from 2,000,000): 3 robots, 0.1 m,
+``varied:`` plans of seeds no run trains or validates on (from 2,000,000): 3 robots (``--robots R``:
+R, ``train.val_robots``; teams the dev set's Table I does not hold, read without its maps), 0.1 m,
 deterministic decoding. For ``hier-heuristic`` (the untrained network) and each policy it prints the
 mean steps to the end and to 99% coverage, the mean coverage, the score of ``train.score: relative``
 (the geometric mean over maps of the ratio to the heuristic's; the heuristic scores 1), and fewer steps
@@ -39,6 +40,7 @@ def main() -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--fresh", type=int, default=0, help="N fresh varied: plans instead of the validation maps")
     ap.add_argument("--csv", type=Path, default=None, help="write per-map results here")
+    ap.add_argument("--robots", type=int, default=None, help="robots per episode (default: train.val_robots, 3)")
     args = ap.parse_args()
     if not TRAIN.is_dir():
         print(f"skipped: training maps not found at {TRAIN}", file=sys.stderr)
@@ -48,10 +50,10 @@ def main() -> int:
             raise MrExploreError(f"policy file not found: {p}; pass a policy.pt that mrexplore train wrote")
     if args.fresh < 0:
         raise MrExploreError(f"--fresh must be >= 0, got {args.fresh}; pass a count of plans, or 0 for validation")
-    cfg = TrainConfig()
+    cfg = TrainConfig() if args.robots is None else TrainConfig(val_robots=args.robots)
     fresh = [f"{cfg.plans}:{FRESH_SEED0 + i}" for i in range(args.fresh)] or None
     maps, ref, ref_cov = validate_policy(None, cfg, TRAIN, args.workers, fresh)
-    print(f"{len(maps)} {'fresh' if fresh else 'validation'} maps, 3 robots, {cfg.resolution_m} m")
+    print(f"{len(maps)} {'fresh' if fresh else 'validation'} maps, {cfg.val_robots} robots, {cfg.resolution_m} m")
     first: np.ndarray | None = None
     per_map: list[dict[str, object]] = []
     for name, policy in [("hier-heuristic", None), *[(str(p), p) for p in args.policies]]:

@@ -564,6 +564,9 @@ class TrainConfig(_Checked):
     """Validation episodes per evaluation: half held-out training DungeonMaps, half held-out floor plans, >= 1
     (32 in the first shipped run: the stage it kept was 9.7% ahead there and tied the heuristic on the dev
     set, so selection needs more maps)."""
+    val_robots: int = 3
+    """Robots in every validation episode, >= 1: the team of the dev set's Table I (training draws
+    ``robots_min`` to ``robots_max``)."""
     score: str = "steps"
     """How the policy search ranks its vectors and validation picks the stage kept: ``steps`` (mean steps
     to the end, the largest maps weighing most) or ``relative`` (every episode weighing the same: the
@@ -654,6 +657,7 @@ class TrainConfig(_Checked):
         _require(0 <= self.generated_share <= 1, "generated_share", "in [0, 1]", self.generated_share)
         _require(self.plans in ("varied", "generated"), "plans", "'varied' or 'generated'", self.plans)
         _require(self.val_maps >= 1, "val_maps", ">= 1", self.val_maps)
+        _require(self.val_robots >= 1, "val_robots", ">= 1", self.val_robots)
         _require(self.score in ("steps", "relative"), "score", "'steps' or 'relative'", self.score)
         for name in ("search_generations", "dagger_rounds", "noisy_candidates", "ppo_iterations"):
             _require(getattr(self, name) >= 0, name, ">= 0", getattr(self, name))

@@ -109,6 +109,26 @@ def test_validate_policy_gives_steps_to_the_end_and_to_99_per_map_in_order() -> 
     assert alone[:, 0].tolist() == steps[:, 0].tolist()
 
 
+def test_validation_episodes_have_the_configured_team(monkeypatch: pytest.MonkeyPatch) -> None:
+    from dataclasses import replace
+
+    from mrexplore.global_planning.learned import trainer
+
+    teams: list[int] = []
+
+    def results(self: object, jobs: list[trainer._Job], timeout: float) -> list[dict[str, float]]:
+        teams.extend(j.robots for j in jobs)
+        return [{"steps": 10, "steps_99": 8, "coverage": 1.0} for _ in jobs]
+
+    monkeypatch.setattr(trainer._Runner, "results", results)
+    maps = ["varied:1", "varied:2"]
+    trainer.validate_policy(None, TINY, None, maps=maps)
+    trainer.validate_policy(None, replace(TINY, val_robots=2), None, maps=maps)
+    assert teams == [3, 3, 2, 2]  # the default is the dev set's Table I team
+    with pytest.raises(MrExploreError, match="val_robots must be >= 1, got 0"):
+        replace(TINY, val_robots=0)
+
+
 def test_a_budget_under_one_search_generation_skips_the_search(tmp_path: Path) -> None:
     from dataclasses import replace
 
