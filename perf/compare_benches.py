@@ -6,7 +6,8 @@ seeds; ``--strategy`` picks the strategy's rows (default hier), ``LABEL=DIR@STRA
 label (a yardstick such as hier-heuristic); each ``--train LABEL=DIR`` (optional) the
 ``mrexplore train`` folder that made the label's policy, whose ``stages.csv`` gives the kept stage and its
 validation steps. The first label is the reference: the paired differences hold it against every other,
-episode by episode.
+episode by episode. Benches over different maps are compared on the episodes they share with ``--common``
+(the means too, else they would average different maps).
 
     python perf/compare_benches.py --runs all=BENCH_ALL no_advantage=BENCH_NOADV heuristic=BENCH_H@hier-heuristic \\
         --train all=TRAIN_ALL no_advantage=TRAIN_NOADV --out report.md
@@ -33,6 +34,10 @@ def _pairs(items: list[str], flag: str) -> dict[str, str]:
     return out
 
 
+def _episode(row: dict[str, str]) -> tuple[str, str, str]:
+    return row["map_path"], row["robots"], row["seed"]
+
+
 def _kept(train_dir: Path) -> tuple[str, str, str]:
     """The stage with the fewest validation steps (the trainer keeps it), its steps and the untrained
     baseline's."""
@@ -49,6 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--train", nargs="*", default=[], help="LABEL=TRAIN_DIR (optional)")
     ap.add_argument("--strategy", default="hier", help="whose rows to compare (default hier)")
     ap.add_argument("--out", type=Path, default=None, help="write the markdown here (default: print it)")
+    ap.add_argument("--common", action="store_true", help="keep only the episodes every run holds")
     args = ap.parse_args(argv)
     runs, trains = _pairs(args.runs, "--runs"), _pairs(args.train, "--train")
     rows: list[dict[str, str]] = []
@@ -62,9 +68,14 @@ def main(argv: list[str] | None = None) -> int:
         shas = {r["policy_sha256"] for r in mine}
         if len(shas) != 1:
             raise SystemExit(f"{csv_path} mixes {len(shas)} policies; give each policy its own bench folder")
-        unique = {(r["map_path"], r["robots"], r["seed"]): dict(r, strategy=label) for r in mine}
+        unique = {_episode(r): dict(r, strategy=label) for r in mine}
         rows += unique.values()
     labels = list(runs)
+    if args.common:
+        shared = set.intersection(*({_episode(r) for r in rows if r["strategy"] == label} for label in labels))
+        if not shared:
+            raise SystemExit("--common: the runs share no episode (map, robots, seed); bench the same maps")
+        rows = [r for r in rows if _episode(r) in shared]
     parts = [
         f"# {args.strategy}: separate benches compared",
         f"Made by: `python perf/compare_benches.py {' '.join(sys.argv[1:])}`",
