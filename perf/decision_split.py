@@ -3,12 +3,17 @@ wrapped around the decision's parts for the first steps of one mission.
 
     python perf/decision_split.py                                   # utility, 8 robots, largest HouseExpo map
     python perf/decision_split.py --strategy hier --robots 8 --steps 300
+    python perf/decision_split.py --map ../shared/maps/kth_floorplans/50010535_PLAN1.yaml --strategy hier \
+        --from-coverage 0.5 --decisions 20
 
 Parts: the centre's rebuild of the robots' maps (``rebuild``, one call per robot) and closing, frontier
 detection, Mean-Shift, the robots' distance fields, the global assignment, layer 3 (``route``, one call
 per robot; for ``hier`` its sub-clustering, candidate distances and order search) and the paths read off
-the fields. Prints the decision's median and each part's milliseconds per decision. Parts nest (``route``
-holds the three after it), so they do not add up to the decision.
+the fields; on a large floor the pooled coarse grid and the near/far fields. Prints the decision's median
+and each part's milliseconds per decision. Parts nest (``route`` holds the three after it, ``state`` the
+rebuilds), so they do not add up to the decision. With ``--from-coverage`` the mission first runs untimed
+until the team's coverage reaches it, then the next ``--decisions`` decisions are timed (the mission's own
+replanning, as :mod:`profile_decision` does): late decisions on a whole floor.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ import numpy as np
 from bench_step_and_decision import largest_houseexpo
 
 import mrexplore.local_planning.router as router
+import mrexplore.paths.far_field as far_field
 import mrexplore.preprocessing.reconstruction as reconstruction
 import mrexplore.strategies as strategies
 from mrexplore.cli import run_script
@@ -31,15 +37,21 @@ from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission
 
 PARTS: tuple[tuple[Any, str, str], ...] = (
-    (reconstruction, "_rebuild_into", "rebuild (per robot)"),
+    (reconstruction.CentreMap, "state", "state"),
+    (reconstruction, "_rebuild_into", "  rebuild (per robot)"),
     (reconstruction, "close_unknown_holes", "closing"),
     (strategies, "detect_frontiers", "frontiers"),
     (strategies, "cluster_frontiers", "mean-shift"),
     (strategies, "distance_fields", "distance fields"),
+    (strategies, "coarse_grid", "coarse grid"),
+    (strategies, "far_fields", "near/far fields"),
+    (far_field, "_seeded_search", "  coarse searches"),
+    (far_field, "distance_fields", "  exact fallbacks"),
     (strategies.ExplorationPipeline, "assign", "assignment"),
     (strategies.ExplorationPipeline, "route", "route (per robot)"),
     (router, "cluster_frontiers", "  sub-clustering"),
     (router, "pairwise_distances", "  candidate distances"),
+    (router, "coarse_pairwise", "  candidate estimates"),
     (router, "reversal_search", "  order search"),
     (strategies, "descend_path", "paths"),
 )
@@ -63,25 +75,37 @@ def main() -> int:
     ap.add_argument("--robots", type=int, default=8)
     ap.add_argument("--steps", type=int, default=300)
     ap.add_argument("--resolution", type=float, default=0.05)
+    ap.add_argument("--from-coverage", type=float, default=None, help="time from this coverage (0-1) on")
+    ap.add_argument("--decisions", type=int, default=20, help="decisions timed with --from-coverage")
     args = ap.parse_args()
+    late = args.from_coverage is not None
     spent: dict[str, list[float]] = {}
-    for owner, name, label in PARTS:
-        spent[label] = []
-        setattr(owner, name, timed(getattr(owner, name), spent[label]))
     truth = load_map(args.map or largest_houseexpo(), MapConfig(resolution_m=args.resolution))
     mission = Mission(
         truth,
         strategies.make_strategy(args.strategy),
         SimConfig(robots=args.robots),
-        MissionConfig(args.steps, 10),
+        MissionConfig(100_000) if late else MissionConfig(args.steps, 10),
         0,
         progress=False,
     )
-    while mission.advance():
+    if late:
+        while mission.advance():
+            mission.decide()
+            if mission.curve[-1] >= args.from_coverage:
+                break
+    for owner, name, label in PARTS:
+        if hasattr(owner, name):  # parts an older checkout lacks (``PYTHONPATH`` at it) are left out
+            spent[label] = []
+            setattr(owner, name, timed(getattr(owner, name), spent[label]))
+    first = len(mission.plan_ms)
+    while (not late or len(mission.plan_ms) - first < args.decisions) and mission.advance():
         mission.decide()
-    n = len(mission.plan_ms)
-    print(f"{truth.name}, {args.strategy}, {args.robots} robots, {args.steps} steps: {n} decisions")
-    print(f"decision median {np.median(mission.plan_ms):.2f} ms, mean {np.mean(mission.plan_ms):.2f} ms")
+    ms = np.asarray(mission.plan_ms[first:])
+    n = len(ms)
+    when = f"from coverage {args.from_coverage}" if late else f"{args.steps} steps"
+    print(f"{truth.name}, {args.strategy}, {args.robots} robots, {when}: {n} decisions to step {mission.steps}")
+    print(f"decision median {np.median(ms):.2f} ms, mean {np.mean(ms):.2f} ms, p95 {np.percentile(ms, 95):.2f} ms")
     print(f"{'part':24s} {'calls':>6s} {'ms per decision':>16s}")
     for label, times in spent.items():
         if times:

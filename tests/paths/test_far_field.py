@@ -1,5 +1,6 @@
 """Near/far distances: the seeded search against a plain Dijkstra, exactness near the robot, a thin wall
-the coarse grid never crosses, a narrow passage it closes, and paths to far goals."""
+the coarse grid never crosses, a narrow passage it closes, paths to far goals, the search stopped at a
+radius, and pairwise estimates on the blocks."""
 
 from __future__ import annotations
 
@@ -12,8 +13,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mrexplore.paths.astar import path_length_cells
-from mrexplore.paths.distance_field import _Searches, distance_fields
-from mrexplore.paths.far_field import Field, NearFarField, _seeded_search, coarse_grid, far_fields, path_to
+from mrexplore.paths.distance_field import _Searches, distance_fields, pairwise_distances
+from mrexplore.paths.far_field import (
+    Field,
+    NearFarField,
+    _seeded_search,
+    coarse_grid,
+    coarse_pairwise,
+    far_fields,
+    path_to,
+)
 
 
 def random_rooms(seed: int, shape: tuple[int, int] = (60, 80), walls: int = 12) -> np.ndarray:
@@ -140,3 +149,58 @@ def test_a_shared_coarse_grid_gives_the_fields_a_grid_of_their_own_does() -> Non
         np.testing.assert_array_equal(a.at(cells), b.at(cells))
     with pytest.raises(ValueError, match=r"grid was pooled by 3 from a \(60, 80\) grid; pool this one by 2"):
         far_fields(g, sources, radius_cells=12, factor=2, grid=grid)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10**6), st.floats(0.0, 40.0))
+def test_a_search_stopped_at_a_radius_keeps_every_distance_within_it(seed: int, limit: float) -> None:
+    g = random_rooms(seed, (30, 40), 8)
+    src = np.argwhere(g)[np.random.default_rng(seed).integers(0, np.count_nonzero(g))]
+    whole = _Searches(g)(int(src[0]), int(src[1]))
+    stopped = _Searches(g)(int(src[0]), int(src[1]), limit=limit)
+    within = whole <= limit
+    np.testing.assert_array_equal(stopped[within], whole[within])  # bit for bit: the same pops
+    assert np.isinf(stopped[~within]).all()
+
+
+def test_pairwise_estimates_by_hand_and_where_the_blocks_do_not_connect() -> None:
+    # An open 6 x 12 room, blocks of 2: from (0, 0) to (0, 11) the exact way is 11 straight cells; the
+    # estimate goes (0, 0) -> middle (1, 1) of its block (sqrt 2), 5 blocks of 2 cells to the middle (1, 11)
+    # of the last block, then 1 cell up: 11.41, and the reverse reads the same.
+    g = np.ones((6, 12), bool)
+    est = coarse_pairwise(coarse_grid(g, 2), np.array([[0, 0], [0, 11], [0, 0]]))
+    assert est[0, 1] == pytest.approx(math.sqrt(2) + 10 + 1)
+    assert est[1, 0] == est[0, 1] and est[0, 2] == 0.0 and est[0, 0] == 0.0
+    # Across the one-cell gap that closes every block around it: unconnected, inf both ways.
+    gap = ~bool_grid(NARROW_GAP)
+    across = coarse_pairwise(coarse_grid(gap, 3), np.array([[0, 0], [0, 19]]))
+    assert math.isinf(across[0, 1]) and math.isinf(across[1, 0]) and across[0, 0] == 0.0
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 10**6))
+def test_pairwise_estimates_are_never_shorter_than_the_exact_distances(seed: int) -> None:
+    g = random_rooms(seed)
+    rng = np.random.default_rng(seed)
+    free = np.argwhere(g)
+    cells = free[rng.choice(len(free), size=8, replace=False)]
+    est = coarse_pairwise(coarse_grid(g, 3), cells)
+    exact = pairwise_distances(g, cells)
+    finite = np.isfinite(est)
+    assert finite.sum() > 8  # the open floor connects most blocks
+    assert (est[finite] >= exact[finite] - 1e-3).all()
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.integers(0, 10**6), st.integers(1, 4))
+def test_pooling_in_one_pass_equals_numpy_on_padded_blocks(seed: int, factor: int) -> None:
+    rng = np.random.default_rng(seed)
+    g = rng.random((int(rng.integers(1, 25)), int(rng.integers(1, 25)))) < 0.9
+    g[int(rng.integers(0, g.shape[0])), int(rng.integers(0, g.shape[1]))] = True
+    rows, cols = np.flatnonzero(g.any(axis=1)), np.flatnonzero(g.any(axis=0))
+    r0, r1, c0, c1 = int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
+    h, w = -(-(r1 - r0) // factor), -(-(c1 - c0) // factor)
+    padded = np.zeros((h * factor, w * factor), bool)  # a block cut by the box's edge is not passable
+    padded[: r1 - r0, : c1 - c0] = g[r0:r1, c0:c1]
+    want = padded.reshape(h, factor, w, factor).all(axis=(1, 3))
+    np.testing.assert_array_equal(coarse_grid(g, factor).passable, want)

@@ -171,6 +171,7 @@ def _search_into(
     q_node: np.ndarray,
     q_key: np.ndarray,
     is_target: np.ndarray,
+    limit: float = np.inf,
 ) -> tuple[int, int]:  # pragma: no cover - numba
     """The search from passable padded cell ``s``, in place on ``best`` (a copy of the start values,
     :func:`_start_values`, row length ``Wp``): finite distances where settled; blocked cells keep
@@ -180,6 +181,9 @@ def _search_into(
     ``q_node``, ``q_key`` (``(2, passable cells + 1)``) and ``is_target`` (all False, one per padded cell)
     are the caller's scratch, reused from search to search: allocating them afresh per search cost more
     in page faults than the search itself on a large floor. ``is_target`` is left all False again.
+
+    ``limit``: the search ends at the first cell farther than it; cells within it are final (keys pop in
+    order), farther ones read ``inf`` (a search that is read only within a radius).
     """
     inf = np.float32(np.inf)
     zero = np.float32(0.0)
@@ -207,6 +211,17 @@ def _search_into(
             h1 += 1
         if du > best[u]:
             continue  # stale: u was settled with a smaller key
+        if du > limit:
+            best[u] = inf
+            for j in range(h0, t0):
+                v = q_node[0, j]
+                if best[v] > limit:
+                    best[v] = inf
+            for j in range(h1, t1):
+                v = q_node[1, j]
+                if best[v] > limit:
+                    best[v] = inf
+            break
         if stop_early and is_target[u]:
             is_target[u] = False
             remaining -= 1
@@ -238,15 +253,17 @@ def _two_queue_dijkstra(
     q_node: np.ndarray,
     q_key: np.ndarray,
     is_target: np.ndarray,
+    limit: float = np.inf,
 ) -> np.ndarray:  # pragma: no cover - numba
     """Distances from padded cell ``s`` over the padded flat grid ``start`` (:func:`_start_values`, row
-    length ``Wp``); ``inf`` where unreachable or blocked. Scratch as :func:`_search_into`."""
+    length ``Wp``); ``inf`` where unreachable or blocked, or farther than ``limit``. Scratch as
+    :func:`_search_into`."""
     inf = np.float32(np.inf)
     best = start.copy()
     if best[s] < np.float32(0.0):
         best[:] = inf
         return best
-    _search_into(best, Wp, s, targets, stop_early, q_node, q_key, is_target)
+    _search_into(best, Wp, s, targets, stop_early, q_node, q_key, is_target, limit)
     for i in range(best.shape[0]):
         if best[i] < np.float32(0.0):
             best[i] = inf
@@ -279,7 +296,7 @@ def _pairwise_kernel(
         if start[s] < zero:
             continue
         later = points[i + 1 :]
-        t0, t1 = _search_into(best, Wp, s, later, True, q_node, q_key, is_target)
+        t0, t1 = _search_into(best, Wp, s, later, True, q_node, q_key, is_target, np.inf)
         for j in range(i + 1, m):
             d = best[points[j]]
             if d >= zero:  # blocked targets keep _BLOCKED
@@ -327,15 +344,18 @@ class _Searches:
         """Flat indices of the grid as flat indices of the padded grid."""
         return (flat // self.w + 1) * self.wp + flat % self.w + 1
 
-    def __call__(self, r: int, c: int, targets: NDArray[np.int64] | None = None) -> NDArray[np.float32]:
+    def __call__(
+        self, r: int, c: int, targets: NDArray[np.int64] | None = None, limit: float = math.inf
+    ) -> NDArray[np.float32]:
         """``(h, w) float32`` distances from cell ``(r, c)`` of the grid (a view without the padding);
-        ``targets`` (padded flat indices, :meth:`padded`), where given, replace the grid's for this search."""
+        ``targets`` (padded flat indices, :meth:`padded`), where given, replace the grid's for this search;
+        cells farther than ``limit`` read ``inf``."""
         scratch = self.scratch()
         s = (r + 1) * self.wp + c + 1
         if targets is None:
-            best = _two_queue_dijkstra(self.start, self.wp, s, self.targets, self.stop_early, *scratch)
+            best = _two_queue_dijkstra(self.start, self.wp, s, self.targets, self.stop_early, *scratch, limit)
         else:
-            best = _two_queue_dijkstra(self.start, self.wp, s, targets, True, *scratch)
+            best = _two_queue_dijkstra(self.start, self.wp, s, targets, True, *scratch, limit)
         return best.reshape((self.h + 2, self.wp))[1:-1, 1:-1]
 
 
