@@ -51,7 +51,6 @@ PARTS: tuple[tuple[Any, str, str], ...] = (
     (strategies.ExplorationPipeline, "route", "route (per robot)"),
     (router, "cluster_frontiers", "  sub-clustering"),
     (router, "pairwise_distances", "  candidate distances"),
-    (router, "coarse_pairwise", "  candidate estimates"),
     (router, "reversal_search", "  order search"),
     (strategies, "descend_path", "paths"),
 )

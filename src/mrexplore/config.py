@@ -343,10 +343,6 @@ class LocalPlanningConfig(_Checked):
     """At most this many sub-clusters (the largest) enter the route, >= 1."""
     margin_m: float = 2.0
     """Distances between candidates are computed on the box around robot and cluster grown by this, m, >= 0."""
-    estimate_between: bool = False
-    """Where the robots' far distances are estimated (``global_planning.far_above_cells``), estimate the
-    distances between a route's candidates on the same coarse grid too, instead of searching them
-    exactly; below that size every distance stays exact."""
 
     def _validate(self) -> None:
         _require(self.theta_members >= 1, "theta_members", ">= 1", self.theta_members)

@@ -1,22 +1,18 @@
-"""Local routing: eq. 11 and eq. 10 by hand, the reversal search against brute force, routes on a map,
-and on a large floor the candidates' distances estimated on the coarse grid."""
+"""Local routing: eq. 11 and eq. 10 by hand, the reversal search against brute force, routes on a map."""
 
 from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import replace
 
 import numpy as np
 import pytest
 from conftest import state_grid
 
-import mrexplore.local_planning.router as router_module
 from mrexplore.config import LocalPlanningConfig
 from mrexplore.local_planning.router import LocalRouter
 from mrexplore.local_planning.routing import RouteProblem, normalise_cost, normalise_gain, reversal_search
 from mrexplore.paths.distance_field import distance_field
-from mrexplore.paths.far_field import far_fields
 from mrexplore.types import CellState
 
 CFG = LocalPlanningConfig(epsilon=1e-12)
@@ -157,33 +153,3 @@ def test_a_router_remembers_only_what_its_inputs_fix() -> None:
     walled_fresh = route(LocalRouter(cfg), walled)
     assert walled_fresh[1] != first[1]  # the walls do change the route's utility
     assert route(router, walled) == walled_fresh
-
-
-def test_with_near_far_fields_the_candidates_are_estimated_on_the_blocks_and_route_the_same(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    # The corridor's sweep from the robot's end, routed with the robot's near/far field: with
-    # estimate_between the distances between the three sub-clusters come from the coarse grid (no exact
-    # search between them), and the order and gains are those of the exact route; without it (the
-    # default) they are searched exactly.
-    passable = state_grid(CORRIDOR) == CellState.FREE
-    members = np.array([[1, c] for c in range(42)], dtype=np.int32)
-    robot = (3, 1)
-    cfg = LocalPlanningConfig(theta_members=10, sub_bandwidth_m=0.4)
-    exact = LocalRouter(cfg).route(passable, robot, distance_field(passable, robot), members, 0.05)
-    near_far = far_fields(passable, np.array([robot]), radius_cells=8, factor=2)[0]
-    searched: list[int] = []
-    search = router_module.pairwise_distances
-
-    def counted(*args: np.ndarray) -> np.ndarray:
-        searched.append(len(args[1]))
-        return search(*args)
-
-    monkeypatch.setattr(router_module, "pairwise_distances", counted)
-    by_default = LocalRouter(cfg).route(passable, robot, near_far, members, 0.05)
-    assert searched == [3] and by_default is not None
-    estimated = LocalRouter(replace(cfg, estimate_between=True)).route(passable, robot, near_far, members, 0.05)
-    assert searched == [3]  # no search more
-    assert exact is not None and estimated is not None
-    assert estimated.targets_rc.tolist() == exact.targets_rc.tolist()
-    assert estimated.gains.tolist() == exact.gains.tolist()

@@ -1,6 +1,6 @@
 """Near/far distances: the seeded search against a plain Dijkstra, exactness near the robot, a thin wall
 the coarse grid never crosses, a narrow passage it closes, paths to far goals, the search stopped at a
-radius, and pairwise estimates on the blocks."""
+radius, and the pooling."""
 
 from __future__ import annotations
 
@@ -13,13 +13,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mrexplore.paths.astar import path_length_cells
-from mrexplore.paths.distance_field import _Searches, distance_fields, pairwise_distances
+from mrexplore.paths.distance_field import _Searches, distance_fields
 from mrexplore.paths.far_field import (
     Field,
     NearFarField,
     _seeded_search,
     coarse_grid,
-    coarse_pairwise,
     far_fields,
     path_to,
 )
@@ -161,34 +160,6 @@ def test_a_search_stopped_at_a_radius_keeps_every_distance_within_it(seed: int, 
     within = whole <= limit
     np.testing.assert_array_equal(stopped[within], whole[within])  # bit for bit: the same pops
     assert np.isinf(stopped[~within]).all()
-
-
-def test_pairwise_estimates_by_hand_and_where_the_blocks_do_not_connect() -> None:
-    # An open 6 x 12 room, blocks of 2: from (0, 0) to (0, 11) the exact way is 11 straight cells; the
-    # estimate goes (0, 0) -> middle (1, 1) of its block (sqrt 2), 5 blocks of 2 cells to the middle (1, 11)
-    # of the last block, then 1 cell up: 11.41, and the reverse reads the same.
-    g = np.ones((6, 12), bool)
-    est = coarse_pairwise(coarse_grid(g, 2), np.array([[0, 0], [0, 11], [0, 0]]))
-    assert est[0, 1] == pytest.approx(math.sqrt(2) + 10 + 1)
-    assert est[1, 0] == est[0, 1] and est[0, 2] == 0.0 and est[0, 0] == 0.0
-    # Across the one-cell gap that closes every block around it: unconnected, inf both ways.
-    gap = ~bool_grid(NARROW_GAP)
-    across = coarse_pairwise(coarse_grid(gap, 3), np.array([[0, 0], [0, 19]]))
-    assert math.isinf(across[0, 1]) and math.isinf(across[1, 0]) and across[0, 0] == 0.0
-
-
-@settings(max_examples=30, deadline=None)
-@given(st.integers(0, 10**6))
-def test_pairwise_estimates_are_never_shorter_than_the_exact_distances(seed: int) -> None:
-    g = random_rooms(seed)
-    rng = np.random.default_rng(seed)
-    free = np.argwhere(g)
-    cells = free[rng.choice(len(free), size=8, replace=False)]
-    est = coarse_pairwise(coarse_grid(g, 3), cells)
-    exact = pairwise_distances(g, cells)
-    finite = np.isfinite(est)
-    assert finite.sum() > 8  # the open floor connects most blocks
-    assert (est[finite] >= exact[finite] - 1e-3).all()
 
 
 @settings(max_examples=80, deadline=None)

@@ -15,7 +15,6 @@ from numpy.typing import NDArray
 from mrexplore.config import LocalPlanningConfig, PreprocessConfig
 from mrexplore.local_planning.routing import RouteProblem, reversal_search
 from mrexplore.paths.distance_field import Distances, distances_at, pairwise_distances
-from mrexplore.paths.far_field import CoarseGrid, NearFarField, coarse_pairwise
 from mrexplore.preprocessing.clustering import cluster_frontiers
 from mrexplore.types import BoolGrid, GridRC
 
@@ -74,9 +73,7 @@ class LocalRouter:
             ``(H, W) bool`` cells a robot may drive on.
         robot_field:
             the robot's distance field on ``passable`` (cells): a :class:`~mrexplore.paths.distance_field.Field`
-            or a whole-grid ``(H, W) float32`` array; or, on a large floor, a
-            :class:`~mrexplore.paths.far_field.NearFarField`, whose coarse grid then estimates the distances
-            between the candidates too.
+            or a whole-grid ``(H, W) float32`` array.
         members_rc:
             ``(n, 2) int32`` members of the assigned cluster.
         """
@@ -103,8 +100,7 @@ class LocalRouter:
         # The largest sub-clusters, at most max_candidates of them.
         keep = keep[np.argsort(-gains[keep], kind="stable")[: cfg.max_candidates]]
         cand, gains, from_robot = cand[keep], gains[keep], from_robot[keep]
-        coarse = robot_field.grid if cfg.estimate_between and isinstance(robot_field, NearFarField) else None
-        between = self._between(passable, robot_rc, members_rc, cand, from_robot, resolution_m, coarse)
+        between = self._between(passable, robot_rc, members_rc, cand, from_robot, resolution_m)
         problem = RouteProblem(gains.astype(np.float64), from_robot, between, cfg)
         order, utility = reversal_search(problem)
         return Route(cand[order].astype(np.int32), gains[order].astype(np.int32), utility)
@@ -117,16 +113,9 @@ class LocalRouter:
         cand: NDArray[np.int32],
         from_robot: NDArray[np.float64],
         resolution_m: float,
-        coarse: CoarseGrid | None = None,
     ) -> NDArray[np.float64]:
         """Geodesic distances between candidates: one field per candidate on the box around robot and
-        cluster grown by ``margin_m`` (paths leaving the box are not seen: the via-robot bound is used).
-
-        With ``coarse`` (a large floor, where the robots' far distances are estimates already) they are
-        estimated on its blocks (:func:`~mrexplore.paths.far_field.coarse_pairwise`, 1-2 ms where the exact
-        searches across a large cluster took 5-30); a pair the blocks leave unconnected (a passage
-        narrower than two blocks, or a way out of the box) takes the via-robot bound, as an exact search
-        that finds no way inside the box does."""
+        cluster grown by ``margin_m`` (paths leaving the box are not seen: the via-robot bound is used)."""
         margin = int(np.ceil(self.cfg.margin_m / resolution_m))
         pts = np.vstack([members_rc, np.asarray(robot_rc, dtype=np.int32)[None]])
         r0, c0 = np.maximum(pts.min(axis=0) - margin, 0)
@@ -138,11 +127,8 @@ class LocalRouter:
             return pairwise_distances(crop, local)
 
         box = (int(r0), int(r1), int(c0), int(c1))
-        if coarse is not None:
-            between = coarse_pairwise(coarse, cand, box)
-        else:
-            key = ("between", box, _digest(np.ascontiguousarray(local)), _digest(np.packbits(crop, axis=1)))
-            between = self._memo.get(key, searched)
+        key = ("between", box, _digest(np.ascontiguousarray(local)), _digest(np.packbits(crop, axis=1)))
+        between = self._memo.get(key, searched)
         via_robot = from_robot[:, None] + from_robot[None, :]
         between = np.where(np.isfinite(between), between, via_robot)
         return np.minimum(between, between.T)

@@ -32,12 +32,11 @@ from mrexplore.paths.distance_field import (
     _Searches,
     descend_path,
     distance_fields,
-    pairwise_distances,
 )
 from mrexplore.threads import map_threads
 from mrexplore.types import BoolGrid, GridRC
 
-__all__ = ["CoarseGrid", "NearFarField", "coarse_grid", "coarse_pairwise", "far_fields", "path_to"]
+__all__ = ["CoarseGrid", "NearFarField", "coarse_grid", "far_fields", "path_to"]
 
 _SQRT2 = math.sqrt(2.0)
 _NEIGHBOURHOOD = [(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1)]
@@ -498,47 +497,3 @@ def _corridor_path(
     d = s(*src)
     path = descend_path(Field.whole(np.ascontiguousarray(d)), local, dst)
     return path + np.array([r0, c0], np.int32) if len(path) else path
-
-
-def coarse_pairwise(
-    grid: CoarseGrid, cells_rc: NDArray[np.integer], box: tuple[int, int, int, int] | None = None
-) -> NDArray[np.float64]:
-    """Estimated geodesic distances between every pair of cells, ``(m, m) float64`` in cells, on ``grid``'s
-    blocks: the exact way from each cell to the middle of its best block (its own or a neighbour), the
-    block path between the two middles, the way back down. Each finite estimate is the length of a real
-    path, so never shorter than the true distance; ``inf`` where either cell has no passable block within
-    reach or the blocks do not connect (a passage narrower than two blocks). ``box`` (fine rows and columns,
-    half-open) bounds the block search as a crop bounds :func:`~mrexplore.paths.distance_field.pairwise_distances`.
-
-    Examples
-    --------
-    >>> g = np.zeros((6, 44), bool); g[1:5, 2:42] = True
-    >>> coarse_pairwise(coarse_grid(g, 2), np.array([[2, 2], [2, 40]])).round(1).tolist()
-    [[0.0, 38.0], [38.0, 0.0]]
-    """
-    cells = np.asarray(cells_rc, np.int64).reshape(-1, 2)
-    m = len(cells)
-    out = np.full((m, m), np.inf)
-    if m == 0:
-        return out
-    f = grid.factor
-    h, w = grid.passable.shape
-    tails = grid.tails(cells)
-    pick = np.argmin(tails, axis=1)
-    tail = tails[np.arange(m), pick]
-    moves = np.array(_NEIGHBOURHOOD, dtype=np.int64)[pick]
-    blocks = np.stack([(cells[:, 0] - grid.r0) // f, (cells[:, 1] - grid.c0) // f], axis=1) + moves
-    ok = np.flatnonzero(np.isfinite(tail))
-    if len(ok) == 0:
-        return out
-    b0, k0 = blocks[ok].min(axis=0)
-    b1, k1 = blocks[ok].max(axis=0) + 1
-    if box is not None:
-        b0, b1 = min(b0, max(0, (box[0] - grid.r0) // f)), max(b1, min(h, -(-(box[1] - grid.r0) // f)))
-        k0, k1 = min(k0, max(0, (box[2] - grid.c0) // f)), max(k1, min(w, -(-(box[3] - grid.c0) // f)))
-    else:
-        b0, b1, k0, k1 = 0, h, 0, w
-    between = pairwise_distances(grid.passable[b0:b1, k0:k1], blocks[ok] - np.array([b0, k0]))
-    out[np.ix_(ok, ok)] = tail[ok, None] + f * between + tail[None, ok]
-    out[(cells[:, None, :] == cells[None, :, :]).all(axis=2)] = 0.0  # a cell to itself
-    return out
