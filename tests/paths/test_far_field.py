@@ -175,3 +175,19 @@ def test_pooling_in_one_pass_equals_numpy_on_padded_blocks(seed: int, factor: in
     padded[: r1 - r0, : c1 - c0] = g[r0:r1, c0:c1]
     want = padded.reshape(h, factor, w, factor).all(axis=(1, 3))
     np.testing.assert_array_equal(coarse_grid(g, factor).passable, want)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 10**6))
+def test_the_grids_shared_exact_searches_read_what_a_fresh_search_does(seed: int) -> None:
+    g = random_rooms(seed)
+    g[:, :3] = False  # the passable box starts off the grid's corner
+    rng = np.random.default_rng(seed)
+    free = np.argwhere(g)
+    grid = coarse_grid(g, 3)
+    assert grid is not None
+    for _ in range(3):  # one set of start values and queues serves every call
+        src = free[rng.integers(len(free))]
+        cells = np.vstack([free[rng.choice(len(free), size=5)], [[0, 0]]])  # the last one is blocked
+        want = distance_fields(g, src[None], cells)[0].at(cells)
+        np.testing.assert_array_equal(grid.exact_at(src, cells), want)
