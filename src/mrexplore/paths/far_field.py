@@ -178,8 +178,9 @@ def _tails(
 def _pool(passable: np.ndarray, r0: int, r1: int, c0: int, c1: int, f: int) -> np.ndarray:  # pragma: no cover
     """``(h, w) bool``: block ``(i, j)`` of rows ``r0 + i f ...`` and columns ``c0 + j f ...`` of ``passable``
     is True when every one of its cells inside ``[r0, r1) x [c0, c1)`` is, and the block lies wholly
-    inside (a block cut by the box's far edge is not passable). One pass over the box: numpy's
-    reduction over the two block axes of a reshaped copy took 11 ms on a KTH floor at 0.05 m."""
+    inside (a block cut by the box's far edge is not passable). One pass over the box: numpy's reduction
+    over the two block axes of a reshaped copy took 12 ms a decision late on a KTH floor at 0.05 m
+    (``perf/decision_split.py``), this 3."""
     h, w = -(-(r1 - r0) // f), -(-(c1 - c0) // f)
     out = np.ones((h, w), dtype=np.bool_)
     for i in range(h):
@@ -236,9 +237,9 @@ class CoarseGrid:
         """Exact distances from ``src_rc`` to ``(k, 2)`` cells of :attr:`fine`, ``(k,) float64`` (``inf`` where
         unreachable), the search stopped once it has reached them all: what
         :func:`~mrexplore.paths.distance_field.distance_fields` reads there, with one set of start values and
-        queues for every call on this grid. Late on a KTH floor a decision makes up to a dozen such searches
-        back from cluster centres the blocks do not reach, and building the start values and first touching
-        fresh queues over 4.9 M cells took a quarter of each."""
+        queues for every call on this grid: late on a KTH floor a decision makes up to a dozen such searches
+        back from cluster centres the blocks do not reach, each of which built start values and touched
+        fresh queues over the 4.9 M cells before."""
         if not self._exact:
             cropped = _crop(self.fine)
             if cropped is None:
@@ -333,8 +334,7 @@ def _near_box(passable: BoolGrid, rc: NDArray[np.integer], radius: int) -> tuple
 def _near(passable: BoolGrid, src: NDArray[np.integer], box: tuple[int, int, int, int], radius: int) -> Field:
     """The exact distances from ``src`` within ``radius`` cells, searched in ``box`` (:func:`_near_box`) and
     stopped at the radius: nothing reads the near field farther out (:meth:`NearFarField.at` and
-    :meth:`~NearFarField.is_exact` take the coarse estimate there, seeds and paths stay within it), and 40%
-    of the cells a search of the whole box reaches lay beyond it late on a KTH floor."""
+    :meth:`~NearFarField.is_exact` take the coarse estimate there, seeds and paths stay within it)."""
     r0, r1, c0, c1 = box
     shape = (int(passable.shape[0]), int(passable.shape[1]))
     cropped = _crop(passable[r0:r1, c0:c1])
@@ -379,7 +379,7 @@ def _one(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius:
 
 def coarse_grid(passable: BoolGrid, factor: int) -> CoarseGrid | None:
     """``passable`` pooled into ``factor`` x ``factor`` blocks, for :func:`far_fields` calls on the same grid to
-    share (pooling a KTH floor at 0.05 m takes about 16 ms); None where no cell is passable.
+    share (pooling a KTH floor at 0.05 m takes about 3 ms); None where no cell is passable.
 
     Examples
     --------
