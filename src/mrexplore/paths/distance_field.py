@@ -161,6 +161,23 @@ def _relax(
     return t0, t1
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def _unsettle(
+    best: np.ndarray, q_node: np.ndarray, h0: int, t0: int, h1: int, t1: int, bound: float | np.float32
+) -> None:  # pragma: no cover - numba
+    """A search that stops early: keys pop in order, so cells at ``bound`` or less are final; the cells still
+    queued ``q_node[0, h0:t0]``, ``q_node[1, h1:t1]`` beyond it are not, and read ``inf``."""
+    inf = np.float32(np.inf)
+    for j in range(h0, t0):
+        v = q_node[0, j]
+        if best[v] > bound:
+            best[v] = inf
+    for j in range(h1, t1):
+        v = q_node[1, j]
+        if best[v] > bound:
+            best[v] = inf
+
+
 @nb.njit(cache=True, nogil=True)
 def _search_into(
     best: np.ndarray,
@@ -213,28 +230,13 @@ def _search_into(
             continue  # stale: u was settled with a smaller key
         if du > limit:
             best[u] = inf
-            for j in range(h0, t0):
-                v = q_node[0, j]
-                if best[v] > limit:
-                    best[v] = inf
-            for j in range(h1, t1):
-                v = q_node[1, j]
-                if best[v] > limit:
-                    best[v] = inf
+            _unsettle(best, q_node, h0, t0, h1, t1, limit)
             break
         if stop_early and is_target[u]:
             is_target[u] = False
             remaining -= 1
             if remaining == 0:
-                # Keys pop in order: cells at du or less are final; the rest of the queues is not.
-                for j in range(h0, t0):
-                    v = q_node[0, j]
-                    if best[v] > du:
-                        best[v] = inf
-                for j in range(h1, t1):
-                    v = q_node[1, j]
-                    if best[v] > du:
-                        best[v] = inf
+                _unsettle(best, q_node, h0, t0, h1, t1, du)
                 break
         t0, t1 = _relax(best, Wp, u, du, q_node, q_key, t0, t1)
     if stop_early:
