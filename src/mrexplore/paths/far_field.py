@@ -331,26 +331,12 @@ def _near_box(passable: BoolGrid, rc: NDArray[np.integer], radius: int) -> tuple
     return max(0, r - radius), min(H, r + radius + 1), max(0, c - radius), min(W, c + radius + 1)
 
 
-def _near(passable: BoolGrid, src: NDArray[np.integer], box: tuple[int, int, int, int], radius: int) -> Field:
-    """The exact distances from ``src`` within ``radius`` cells, searched in ``box`` (:func:`_near_box`) and
-    stopped at the radius: nothing reads the near field farther out (:meth:`NearFarField.at` and
-    :meth:`~NearFarField.is_exact` take the coarse estimate there, seeds and paths stay within it)."""
-    r0, r1, c0, c1 = box
-    shape = (int(passable.shape[0]), int(passable.shape[1]))
-    cropped = _crop(passable[r0:r1, c0:c1])
-    r, c = int(src[0]) - r0, int(src[1]) - c0
-    if cropped is None:
-        return Field(np.full((0, 0), np.inf, dtype=np.float32), 0, 0, shape)
-    crop, b0, k0 = cropped
-    if not (0 <= r - b0 < crop.shape[0] and 0 <= c - k0 < crop.shape[1]):
-        return Field(np.full((0, 0), np.inf, dtype=np.float32), 0, 0, shape)
-    values = _Searches(crop)(r - b0, c - k0, limit=float(radius))
-    return Field(values, r0 + b0, c0 + k0, shape)
-
-
 def _one(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius: int) -> NearFarField:
     r0, r1, c0, c1 = _near_box(passable, src, radius)
-    near = _near(passable, src, (r0, r1, c0, c1), radius)
+    # Stopped at the radius: beyond it the field reads the coarse estimate, and seeds and paths stay within.
+    local = np.array([[int(src[0]) - r0, int(src[1]) - c0]])
+    near = distance_fields(passable[r0:r1, c0:c1], local, limit=float(radius))[0]
+    near = Field(near.values, near.r0 + r0, near.c0 + c0, (int(passable.shape[0]), int(passable.shape[1])))
     # Seeds: the passable blocks whose middle cell the exact search reached within the radius.
     f = grid.factor
     h, w = grid.passable.shape
