@@ -125,3 +125,28 @@ def test_state_version_moves_only_when_the_three_state_grid_changes() -> None:
     belief.note_window((1, 2, 1, 2))
     grid.update(belief)
     assert grid.state_version == 2 and grid.state[1, 1] == CellState.OCCUPIED
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(1, 12), st.integers(1, 12), st.integers(0, 2**32 - 1), st.floats(0.0, 1.0))
+def test_baseline_grid_bytes_are_the_known_box_as_ros_values(h: int, w: int, seed: int, known: float) -> None:
+    """The baseline message's bytes: the box of known cells as int8 ROS values (-1, 0, 100), raw and zlib
+    level 6, as numpy's mask, box and table lookup give them; a window of a larger grid (not contiguous)
+    too, and a grid with nothing known gives the header alone."""
+    import zlib
+
+    from mrexplore.boxes import mask_box
+    from mrexplore.preprocessing.sparse_codec import HEADER
+    from mrexplore.preprocessing.transmission import occupancy_grid_bytes
+
+    rng = np.random.default_rng(seed)
+    grid = np.where(rng.random((h + 2, w + 2)) < known, rng.integers(0, 2, (h + 2, w + 2)), CellState.UNKNOWN)
+    grid = grid.astype(np.uint8)
+    window = grid[1:-1, 1:-1]
+    box = mask_box(window != CellState.UNKNOWN)
+    if box is None:
+        expected = (HEADER.size, HEADER.size)
+    else:
+        ros = np.array([0, 100, -1], np.int8)[window[box[0] : box[1], box[2] : box[3]]].tobytes()
+        expected = (HEADER.size + len(ros), HEADER.size + len(zlib.compress(ros, 6)))
+    assert occupancy_grid_bytes(window) == expected

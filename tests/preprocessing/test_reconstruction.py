@@ -298,3 +298,37 @@ def test_paper_fill_is_the_seed_component_off_the_fence(data: st.DataObject) -> 
     labels, _ = ndimage.label(~fence)
     expected = fence | ((labels == labels[seed]) & ~fence)
     assert np.array_equal(fill_paper(fence, seed), expected)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.integers(0, 60), max_size=40, unique=True),
+    st.lists(st.tuples(st.integers(0, 60), st.integers(0, 3)), max_size=40),
+)
+def test_delta_leaves_the_cells_numpys_set_operations_give(held: list[int], delta: list[tuple[int, int]]) -> None:
+    """The centre's coded cells after a delta: one merge, the same sorted cells as the set operations it
+    replaced, duplicates in the delta included (a cell stays when one of its codes is not 0)."""
+    from mrexplore.preprocessing.reconstruction import _updated_cells
+
+    cells_ = np.array(sorted(held), np.int64)
+    delta.sort(key=lambda cc: cc[0])
+    changed = np.array([c for c, _ in delta], np.int64)
+    codes = np.array([k for _, k in delta], np.uint8)
+    expected = np.union1d(np.setdiff1d(cells_, changed[codes == 0]), changed[codes != 0])
+    assert _updated_cells(cells_, changed, codes).tolist() == expected.tolist()
+
+
+def test_a_delta_after_an_unsorted_full_map_keeps_every_cell() -> None:
+    """A full map whose cells come in another order, then a delta: the cells are those of the set operations."""
+    from mrexplore.preprocessing.sparse_map import SparseFrontierMap
+
+    centre = CentreMap(1, (4, 4), 1)
+    full = SparseFrontierMap(
+        0, 0, (4, 4), (0, 0), np.array([9, 2, 5], np.int64), np.array([1, 1, 1], np.uint8), np.zeros(0, np.int64)
+    )
+    centre.receive(full)
+    delta = SparseFrontierMap(
+        0, 1, (4, 4), (0, 0), np.array([2, 7], np.int64), np.array([0, 3], np.uint8), np.zeros(0, np.int64), 0
+    )
+    centre.receive(delta)
+    assert centre._cells[0].tolist() == [5, 7, 9]

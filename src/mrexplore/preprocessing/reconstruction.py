@@ -13,6 +13,7 @@ as the fence, no neighbour codes.
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
@@ -125,6 +126,34 @@ def _rebuild_into(
     return 0, codes.shape[0], 0, codes.shape[1]
 
 
+@nb.njit(cache=True, nogil=True)
+def _updated_cells(cells: np.ndarray, changed: np.ndarray, codes: np.ndarray) -> np.ndarray:  # pragma: no cover
+    """The sorted cells left coded after a delta: those of ``cells`` (sorted, unique) the delta did not
+    touch, and the delta's ``changed`` cells (sorted) whose ``codes`` are not 0; a cell the delta lists more
+    than once stays when one of its codes is not 0. One merge of the two sorted lists, the set that
+    ``np.union1d(np.setdiff1d(cells, changed[codes == 0]), changed[codes != 0])`` gives, which sorted both
+    again per message: 5% of a mission's time on a KTH floor."""
+    out = np.empty(len(cells) + len(changed), dtype=np.int64)
+    n = i = j = 0
+    while i < len(cells) or j < len(changed):
+        if j >= len(changed) or (i < len(cells) and cells[i] < changed[j]):
+            out[n] = cells[i]
+            n += 1
+            i += 1
+            continue
+        v = changed[j]
+        keep = False
+        while j < len(changed) and changed[j] == v:
+            keep = keep or codes[j] != 0
+            j += 1
+        if i < len(cells) and cells[i] == v:
+            i += 1
+        if keep:
+            out[n] = v
+            n += 1
+    return out[:n]
+
+
 def _union(a: Box | None, b: Box | None) -> Box | None:
     if a is None or b is None:
         return b if a is None else a
@@ -210,8 +239,16 @@ class CentreMap:
                     f"{self._round[i]}; ask the robot for a full map"
                 )
             apply_delta(self._codes[i], message)
-            gone = message.cells[message.codes == 0]
-            self._cells[i] = np.union1d(np.setdiff1d(self._cells[i], gone), message.cells[message.codes != 0])
+            changed, codes = message.cells, message.codes
+            if len(changed) > 1 and not bool(np.all(changed[1:] >= changed[:-1])):
+                order = np.argsort(changed, kind="stable")
+                changed, codes = changed[order], codes[order]
+            held = self._cells[i]
+            if len(held) > 1 and not bool(np.all(held[1:] > held[:-1])):
+                held = np.unique(held)  # a full map's cells in another order: what setdiff1d sorted first
+            self._cells[i] = _updated_cells(
+                held.astype(np.int64, copy=False), changed.astype(np.int64, copy=False), codes
+            )
         else:
             self._codes[i] = message.code_grid()
             self._cells[i] = message.cells.copy()

@@ -17,10 +17,11 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Literal
 
+import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import Box, box_union, mask_box
+from mrexplore.boxes import Box, box_union
 from mrexplore.config import PreprocessConfig, SensorConfig
 from mrexplore.preprocessing.frontiers import closing_reach
 from mrexplore.preprocessing.onboard import OnBoardGrid
@@ -48,6 +49,52 @@ for _state, _value in _ROS_VALUES.items():
 _EMPTY: Box = (0, 0, 0, 0)
 
 
+@nb.njit(cache=True, nogil=True)
+def _ros_box(state: np.ndarray, lut: np.ndarray, unknown: int) -> np.ndarray:  # pragma: no cover - numba
+    """The ROS values (``lut`` of each state) of the bounding box of the cells that are not ``unknown``,
+    flattened row by row; empty when every cell is unknown. The box's rows and columns are found by scans
+    that stop at the first known cell, then the box is written in one pass: a third of the time of the
+    comparison, the box's reductions and the table lookup over the whole window they replace."""
+    H, W = state.shape
+    r0 = H
+    for r in range(H):
+        for c in range(W):
+            if state[r, c] != unknown:
+                r0 = r
+                break
+        if r0 < H:
+            break
+    if r0 == H:
+        return np.zeros(0, dtype=np.int8)
+    r1 = r0 + 1
+    for r in range(H - 1, r0, -1):
+        hit = False
+        for c in range(W):
+            if state[r, c] != unknown:
+                hit = True
+                break
+        if hit:
+            r1 = r + 1
+            break
+    c0, c1 = W, 0
+    for r in range(r0, r1):
+        for c in range(c0):
+            if state[r, c] != unknown:
+                c0 = c
+                break
+        for c in range(W - 1, c1 - 1, -1):
+            if state[r, c] != unknown:
+                c1 = c + 1
+                break
+    out = np.empty((r1 - r0) * (c1 - c0), dtype=np.int8)
+    n = 0
+    for r in range(r0, r1):
+        for c in range(c0, c1):
+            out[n] = lut[state[r, c]]
+            n += 1
+    return out
+
+
 def occupancy_grid_bytes(state: StateGrid) -> tuple[int, int]:
     """Bytes of the baseline message of one grid: int8 cells (ROS: -1 unknown, 0 free, 100 occupied) over
     the bounding box of known cells plus the same header as a frontier message; raw and zlib level 6.
@@ -59,12 +106,10 @@ def occupancy_grid_bytes(state: StateGrid) -> tuple[int, int]:
     >>> raw - HEADER.size  # a 2 x 5 box
     10
     """
-    known = mask_box(state != CellState.UNKNOWN)
-    if known is None:
+    data = _ros_box(state, _ROS_LUT, int(CellState.UNKNOWN))
+    if len(data) == 0:
         return HEADER.size, HEADER.size
-    box = state[known[0] : known[1], known[2] : known[3]]
-    data = _ROS_LUT[box].tobytes()
-    return HEADER.size + len(data), HEADER.size + len(zlib.compress(data, 6))
+    return HEADER.size + len(data), HEADER.size + len(zlib.compress(memoryview(data), 6))
 
 
 class RobotSender:
