@@ -109,7 +109,7 @@ def occupancy_grid_bytes(state: StateGrid) -> tuple[int, int]:
     data = _ros_box(state, _ROS_LUT, int(CellState.UNKNOWN))
     if len(data) == 0:
         return HEADER.size, HEADER.size
-    return HEADER.size + len(data), HEADER.size + len(zlib.compress(memoryview(data), 6))
+    return HEADER.size + len(data), HEADER.size + len(zlib.compress(data.data, 6))
 
 
 class RobotSender:
