@@ -173,3 +173,20 @@ def test_astar_reuses_its_arrays_without_leaking_between_calls() -> None:
     assert astar_path(wide, (1, 0), (1, 5)).tolist()[-1] == [1, 5]
     assert astar_path(wide, (0, 0), (3, 5)).tolist() == first
     assert astar_path(tall, (0, 2), (2, 1)).tolist() == []  # a wall cell: no path, whatever came before
+
+
+def test_pairwise_distances_across_pieces_of_free_space() -> None:
+    """Points in three pieces of free space, in turns: inf between pieces, exact within each, whichever
+    search settles a piece first (the kernel leaves out the points of pieces already settled)."""
+    free = ~bool_grid("""
+        ..#..#..
+        ..#..#..
+        ..#..#..
+    """)
+    points = np.array([[0, 0], [0, 3], [2, 6], [2, 1], [2, 4], [0, 7]])
+    d = pairwise_distances(free, points)
+    piece = np.array([0, 1, 2, 0, 1, 2])
+    apart = piece[:, None] != piece[None, :]
+    assert np.isinf(d[apart]).all()
+    # within each piece: one diagonal and one straight move (2 rows down, 1 column across)
+    assert d[0, 3] == d[1, 4] == d[2, 5] == pytest.approx(1 + math.sqrt(2))

@@ -286,23 +286,50 @@ def _pairwise_kernel(
     later points, each search stopped once it has reached them; ``inf`` elsewhere. One array serves every
     search and is restored from the queues after each (:func:`_search_into`): a copy of the grid and a pass
     over it per search, and a thread hand-off per row, cost more than the short searches between a
-    cluster's candidates."""
+    cluster's candidates.
+
+    A search that runs out before reaching its targets has settled its source's whole component: every
+    point it reached is labelled with it, and later searches leave out the points of other components,
+    which they could not reach either. In a route's box late on a KTH floor the candidates often lie in
+    several pieces of free space (joined only outside the box), and each search from the first piece
+    used to search all of it again for the points of the others."""
     m = points.shape[0]
     out = np.full((m, m), np.inf)
     best = start.copy()
     zero = np.float32(0.0)
+    inf = np.float32(np.inf)
+    label = np.full(m, -1, dtype=np.int64)
+    """The component of each point, by the source whose search settled all of it; -1: none yet."""
+    chosen = np.empty(m, dtype=np.int64)
     for i in rows:
         if i >= m - 1:
             continue
         s = points[i]
         if start[s] < zero:
             continue
-        later = points[i + 1 :]
-        t0, t1 = _search_into(best, Wp, s, later, True, q_node, q_key, is_target, np.inf)
+        # The later points that may share i's component: those of its own (all of them reachable), or,
+        # where i lies in no settled component, those in none either.
+        k = 0
+        for j in range(i + 1, m):
+            if label[j] == label[i]:
+                chosen[k] = points[j]
+                k += 1
+        if k == 0:
+            continue
+        t0, t1 = _search_into(best, Wp, s, chosen[:k], True, q_node, q_key, is_target, np.inf)
         for j in range(i + 1, m):
             d = best[points[j]]
             if d >= zero:  # blocked targets keep _BLOCKED
                 out[i, j] = d
+        ran_out = False
+        for j in range(k):
+            if start[chosen[j]] >= zero and best[chosen[j]] == inf:
+                ran_out = True
+        if ran_out:
+            for j in range(m):
+                d = best[points[j]]
+                if d >= zero and d < inf:
+                    label[j] = i
         best[s] = start[s]
         for j in range(t0):
             best[q_node[0, j]] = start[q_node[0, j]]
