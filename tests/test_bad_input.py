@@ -287,3 +287,18 @@ def test_perf_scripts_give_one_line_on_bad_input(script: str) -> None:
     assert out.returncode == 2
     fix = "pass an existing map file with --map"
     assert out.stderr == f"{script}: error: map file not found: no_such_map.yaml; {fix}\n"
+
+
+def test_a_bandwidth_bound_must_be_positive_and_leaves_old_benches_their_hash() -> None:
+    from dataclasses import replace
+
+    from mrexplore.bench.runner import _settings_dict, settings_hash
+    from mrexplore.config import PreprocessConfig, RunConfig
+
+    with pytest.raises(
+        MrExploreError, match=r"^bandwidth_max_m must be > 0 metres, or null for the percentile rule alone, got 0.0$"
+    ):
+        PreprocessConfig(bandwidth_max_m=0.0)
+    run = RunConfig()
+    assert "bandwidth_max_m" not in _settings_dict(run)["preprocess"]  # unbounded: hashed as before it existed
+    assert settings_hash(replace(run, preprocess=PreprocessConfig(bandwidth_max_m=6.0))) != settings_hash(run)

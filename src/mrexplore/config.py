@@ -216,6 +216,10 @@ class PreprocessConfig(_Checked):
     """Mean-Shift bandwidth as this percentile of pairwise frontier distances (paper: 15), in (0, 100]."""
     bandwidth_sample: int = 1000
     """At most this many frontier cells (an even stride over them) enter the percentile, >= 2."""
+    bandwidth_max_m: float | None = None
+    """Upper bound of the Mean-Shift bandwidth, metres, > 0; None: the percentile rule alone (the paper's).
+    The rule scales with the frontier's extent: on a whole KTH floor it gives 7-10 m, so 8 robots share
+    6-9 clusters of the whole floor."""
     drop_specks: bool = True
     """Before Mean-Shift, drop 8-connected pieces of F_un under ``min_cluster_size`` cells (the rule CoScan's
     and NCM's candidates follow), so every strategy ends on the same frontiers; False: the paper's rule
@@ -243,6 +247,12 @@ class PreprocessConfig(_Checked):
         _require(self.min_cluster_size >= 1, "min_cluster_size", ">= 1", self.min_cluster_size)
         _require(0 < self.bandwidth_percentile <= 100, "bandwidth_percentile", "in (0, 100]", self.bandwidth_percentile)
         _require(self.bandwidth_sample >= 2, "bandwidth_sample", ">= 2", self.bandwidth_sample)
+        _require(
+            self.bandwidth_max_m is None or (math.isfinite(self.bandwidth_max_m) and self.bandwidth_max_m > 0),
+            "bandwidth_max_m",
+            "> 0 metres, or null for the percentile rule alone",
+            self.bandwidth_max_m,
+        )
         _require(
             math.isfinite(self.split_min_frontier_m) and self.split_min_frontier_m >= 0,
             "split_min_frontier_m",

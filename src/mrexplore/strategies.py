@@ -291,7 +291,8 @@ class ExplorationPipeline:
         """Layer 1's candidates: F_un (less blacklisted cells) clustered by Mean-Shift (paper IV-A)."""
         speck = self.preprocess.min_cluster_size if self.preprocess.drop_specks else 1  # 1: none dropped
         un_rc = _denoised_un(q.frontiers, q.blacklist, speck).astype(np.int32)
-        clusters = cluster_frontiers(un_rc, self.preprocess)
+        cap = self.preprocess.bandwidth_max_m
+        clusters = cluster_frontiers(un_rc, self.preprocess, None, None if cap is None else cap / q.resolution_m)
         if self.preprocess.split_for_team:
             pp = self.preprocess
             shortest = math.ceil(round(pp.split_min_frontier_m / q.resolution_m, 6))  # metres to members

@@ -51,6 +51,38 @@ def test_bandwidth_is_percentile_of_pairwise_distances() -> None:
     assert adaptive_bandwidth(pts, 15, 100) == pytest.approx(3.3)
 
 
+def test_a_bandwidth_bound_keeps_pairs_apart_that_the_percentile_rule_joins() -> None:
+    # Four pairs of cells 6 apart on a row: the 15th percentile of the 28 distances is 5, so the flat
+    # kernel joins neighbouring pairs (3 clusters); bounded at 2 cells, each pair is a cluster of its own,
+    # centred on its first cell (both are 0.5 from the mode).
+    pts = np.array([[0, c] for s in (0, 6, 12, 18) for c in (s, s + 1)])
+    assert adaptive_bandwidth(pts.astype(float), 15, 1000) == 5.0
+    assert cluster_frontiers(pts, PreprocessConfig()).sizes.tolist() == [3, 2, 3]
+    bounded = cluster_frontiers(pts, PreprocessConfig(), max_bandwidth_cells=2.0)
+    assert bounded.centers_rc.tolist() == [[0, 0], [0, 6], [0, 12], [0, 18]]
+    assert bounded.sizes.tolist() == [2, 2, 2, 2]
+    # A bound above the rule's bandwidth changes nothing.
+    assert cluster_frontiers(pts, PreprocessConfig(), max_bandwidth_cells=5.0).sizes.tolist() == [3, 2, 3]
+
+
+@pytest.mark.parametrize(("bound_m", "resolution_m", "clusters"), [(1.0, 0.5, 4), (None, 0.5, 3), (1.0, 0.1, 3)])
+def test_a_pipeline_bounds_the_bandwidth_in_metres(bound_m: float | None, resolution_m: float, clusters: int) -> None:
+    # The pairs above as frontier cells. 1 m is 2 cells at 0.5 m: the pairs stay apart. At 0.1 m it is 10
+    # cells, above the rule's 5: the paper's clusters, as with no bound.
+    from mrexplore.preprocessing.frontiers import Frontiers
+    from mrexplore.strategies import CandidateQuery, make_strategy
+
+    un = np.zeros((3, 24), dtype=bool)
+    for s in (0, 6, 12, 18):
+        un[1, s : s + 2] = True
+    pp = PreprocessConfig(bandwidth_max_m=bound_m)
+    frontiers = Frontiers(un, np.zeros_like(un))
+    q = CandidateQuery(
+        np.zeros(un.shape, np.uint8), frontiers, None, np.zeros((1, 2), np.int32), list, None, resolution_m
+    )
+    assert len(make_strategy("utility", preprocess_cfg=pp).candidates(q).clusters) == clusters
+
+
 @given(
     st.lists(st.floats(0, 1e4, allow_nan=False), min_size=1, max_size=60),
     st.one_of(st.integers(0, 100), st.floats(0, 100), st.sampled_from([15, 15.0, 50, 99.9])),

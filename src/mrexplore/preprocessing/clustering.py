@@ -94,7 +94,10 @@ def linear_percentile(values: NDArray[np.float64], percentile: float) -> float:
 
 
 def cluster_frontiers(
-    frontier_rc: NDArray[np.integer], cfg: PreprocessConfig, bandwidth_cells: float | None = None
+    frontier_rc: NDArray[np.integer],
+    cfg: PreprocessConfig,
+    bandwidth_cells: float | None = None,
+    max_bandwidth_cells: float | None = None,
 ) -> Clusters:
     """Cluster frontier cells with Mean-Shift and snap each mode to its nearest member.
 
@@ -106,6 +109,8 @@ def cluster_frontiers(
         ``(n, 2) int`` frontier cells (F_un).
     bandwidth_cells:
         Fixed Mean-Shift bandwidth; None: the percentile rule of ``cfg``.
+    max_bandwidth_cells:
+        Upper bound of the percentile rule's bandwidth (``cfg.bandwidth_max_m`` in cells); None: none.
 
     Examples
     --------
@@ -123,6 +128,8 @@ def cluster_frontiers(
     pts = np.asarray(frontier_rc, dtype=np.float64)
     if bandwidth_cells is None:
         bandwidth_cells = adaptive_bandwidth(pts, cfg.bandwidth_percentile, cfg.bandwidth_sample)
+        if max_bandwidth_cells is not None:
+            bandwidth_cells = min(bandwidth_cells, max_bandwidth_cells)
     bandwidth = max(bandwidth_cells, 1.0)
     modes, labels = mean_shift(pts, bandwidth)
     sizes = np.bincount(labels, minlength=len(modes))
