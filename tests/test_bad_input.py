@@ -299,6 +299,7 @@ def test_a_bandwidth_bound_must_be_positive_and_leaves_old_benches_their_hash() 
         MrExploreError, match=r"^bandwidth_max_m must be > 0 metres, or null for the percentile rule alone, got 0.0$"
     ):
         PreprocessConfig(bandwidth_max_m=0.0)
-    run = RunConfig()
-    assert "bandwidth_max_m" not in _settings_dict(run)["preprocess"]  # unbounded: hashed as before it existed
-    assert settings_hash(replace(run, preprocess=PreprocessConfig(bandwidth_max_m=6.0))) != settings_hash(run)
+    paper = replace(RunConfig(), preprocess=PreprocessConfig(bandwidth_max_m=None))
+    assert "bandwidth_max_m" not in _settings_dict(paper)["preprocess"]  # unbounded: hashed as before it existed
+    assert _settings_dict(RunConfig())["preprocess"]["bandwidth_max_m"] == 6.0
+    assert settings_hash(RunConfig()) != settings_hash(paper)
