@@ -219,9 +219,10 @@ class PreprocessConfig(_Checked):
     bandwidth_max_m: float | None = 6.0
     """Upper bound of the Mean-Shift bandwidth, metres, > 0; None: the percentile rule alone (the paper's).
     The rule scales with the frontier's extent: on a whole KTH floor it gives 7-10 m, so 8 robots share
-    6-9 clusters of the whole floor. At one sensor range (6 m) learned ``hier`` took 24-30% fewer steps on
-    PLAN2 and PLAN3 and 4% fewer on the seven smaller KTH floors, and changed the dev set's HouseExpo and
-    DungeonMaps episodes at 0.1 m by under 1% (docs/speed.md, "A bound on the Mean-Shift bandwidth")."""
+    6-9 clusters of the whole floor. At one sensor range (6 m) learned ``hier`` took 29% fewer steps on
+    PLAN1-3 (9 paired episodes) and 4% fewer on the seven smaller KTH floors, and changed the dev set's
+    HouseExpo and DungeonMaps episodes at 0.1 m by under 1% (docs/speed.md, "A bound on the Mean-Shift
+    bandwidth")."""
     drop_specks: bool = True
     """Before Mean-Shift, drop 8-connected pieces of F_un under ``min_cluster_size`` cells (the rule CoScan's
     and NCM's candidates follow), so every strategy ends on the same frontiers; False: the paper's rule

@@ -298,8 +298,7 @@ def _pairwise_kernel(
     best = start.copy()
     zero = np.float32(0.0)
     inf = np.float32(np.inf)
-    label = np.full(m, -1, dtype=np.int64)
-    """The component of each point, by the source whose search settled all of it; -1: none yet."""
+    label = np.full(m, -1, dtype=np.int64)  # each point's component, named by the search that settled it all
     chosen = np.empty(m, dtype=np.int64)
     for i in rows:
         if i >= m - 1:

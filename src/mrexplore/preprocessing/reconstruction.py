@@ -132,7 +132,7 @@ def _updated_cells(cells: np.ndarray, changed: np.ndarray, codes: np.ndarray) ->
     touch, and the delta's ``changed`` cells (sorted) whose ``codes`` are not 0; a cell the delta lists more
     than once stays when one of its codes is not 0. One merge of the two sorted lists, the set that
     ``np.union1d(np.setdiff1d(cells, changed[codes == 0]), changed[codes != 0])`` gives, which sorted both
-    again per message: 5% of a mission's time on a KTH floor."""
+    again per message: 5% of a mission's time on a KTH floor under cProfile."""
     out = np.empty(len(cells) + len(changed), dtype=np.int64)
     n = i = j = 0
     while i < len(cells) or j < len(changed):

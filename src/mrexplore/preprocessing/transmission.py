@@ -53,8 +53,9 @@ _EMPTY: Box = (0, 0, 0, 0)
 def _ros_box(state: np.ndarray, lut: np.ndarray, unknown: int) -> np.ndarray:  # pragma: no cover - numba
     """The ROS values (``lut`` of each state) of the bounding box of the cells that are not ``unknown``,
     flattened row by row; empty when every cell is unknown. The box's rows and columns are found by scans
-    that stop at the first known cell, then the box is written in one pass: a third of the time of the
-    comparison, the box's reductions and the table lookup over the whole window they replace."""
+    that stop at the first known cell, then the box is written in one pass, where numpy's comparison, the
+    box's reductions and the table lookup each passed over the whole window (2.9 s of a 60 s mission on a
+    KTH floor under cProfile, zlib aside)."""
     H, W = state.shape
     r0 = H
     for r in range(H):
