@@ -243,15 +243,11 @@ class CentreMap:
             if len(changed) > 1 and not bool(np.all(changed[1:] >= changed[:-1])):
                 order = np.argsort(changed, kind="stable")
                 changed, codes = changed[order], codes[order]
-            held = self._cells[i]
-            if len(held) > 1 and not bool(np.all(held[1:] > held[:-1])):
-                held = np.unique(held)  # a full map's cells in another order: what setdiff1d sorted first
-            self._cells[i] = _updated_cells(
-                held.astype(np.int64, copy=False), changed.astype(np.int64, copy=False), codes
-            )
+            self._cells[i] = _updated_cells(self._cells[i], changed.astype(np.int64, copy=False), codes)
         else:
             self._codes[i] = message.code_grid()
-            self._cells[i] = message.cells.copy()
+            # Sorted and unique, as the delta's merge needs them (the fill reads them in any order).
+            self._cells[i] = np.unique(message.cells).astype(np.int64, copy=False)
         self._seeds[i] = message.seeds
         self._round[i] = message.round
         self._known[i] = True
