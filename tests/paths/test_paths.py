@@ -190,3 +190,19 @@ def test_pairwise_distances_across_pieces_of_free_space() -> None:
     assert np.isinf(d[apart]).all()
     # within each piece: one diagonal and one straight move (2 rows down, 1 column across)
     assert d[0, 3] == d[1, 4] == d[2, 5] == pytest.approx(1 + math.sqrt(2))
+
+
+def test_a_path_is_read_off_a_field_beyond_float32_precision() -> None:
+    """A band three cells wide along a 3,000-cell diagonal: the only shortest path is the diagonal itself.
+    Past 2,048 cells a float32 distance is rounded by more than the strict 1e-4 test allows, and reading
+    the path back used to give none at all (a KTH floor at 0.05 m then idled a team for 12,000 steps)."""
+    n = 3000
+    i = np.arange(n)
+    free = np.zeros((n, n), dtype=bool)
+    for k in (-1, 0, 1):
+        keep = (i + k >= 0) & (i + k < n)
+        free[i[keep], i[keep] + k] = True
+    field = distance_field(free, (0, 0))
+    assert field[n - 1, n - 1] == pytest.approx((n - 1) * math.sqrt(2), rel=1e-4)  # float32 sums drift
+    path = descend_path(field, free, (n - 1, n - 1))
+    assert path.tolist() == [[k, k] for k in range(n)]
