@@ -11,7 +11,7 @@ from scipy import ndimage
 
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, PreprocessConfig, SimConfig
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import run_mission
+from mrexplore.mission import Mission, run_mission
 from mrexplore.paths.far_field import NearFarField
 from mrexplore.preprocessing.frontiers import Frontiers
 from mrexplore.strategies import _denoised_un, make_strategy
@@ -60,6 +60,20 @@ def test_hier_routes_through_sub_clusters(small_map) -> None:
     assert max(seen) > 1  # some decision routed a robot through several targets
     assert make_strategy("hier", local=False).local is None
     assert make_strategy("hier", local=False).name == "hier-nolocal"
+
+
+def test_goals_with_no_path_are_blacklisted_not_chosen_forever(small_map, monkeypatch) -> None:
+    # Every path comes back empty, as it did on a large floor where a distance was only an estimate (and
+    # where float32 distances beyond 2,048 cells read back no path): each goal is blacklisted when given,
+    # so the candidates run out and the mission ends instead of idling the team to its budget.
+    import mrexplore.strategies as strategies
+
+    monkeypatch.setattr(strategies, "path_to", lambda *a: np.zeros((0, 2), np.int32))
+    m = Mission(small_map, make_strategy("utility"), SimConfig(robots=2), MissionConfig(max_steps=5000), seed=1)
+    m.run()
+    assert m.done_reason == "no_frontiers" and m.steps < 5000
+    assert m.pathless_goals >= 1 and m.blacklist.any()
+    assert (m.sim.positions_rc == m.starts_rc).all()  # nobody ever had a path to drive
 
 
 def test_wrong_number_of_starts_refused(small_map) -> None:

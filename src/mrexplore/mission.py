@@ -184,6 +184,8 @@ class Mission:
         """Times a robot was committed to its goal because it kept returning to goals it gave up."""
         self.stalls = 0
         """Goals the progress watchdog dropped."""
+        self.pathless_goals = 0
+        """Goals the centre assigned with no path to them, blacklisted (:meth:`_apply`)."""
         self.state = np.full(truth.shape, CellState.UNKNOWN, dtype=np.uint8)  # until the first round
         self.done_reason: str | None = None
         show = sys.stderr.isatty() if progress is None else progress
@@ -289,14 +291,17 @@ class Mission:
     def _drop_stalled(self, i: int) -> None:
         """The watchdog: robot i gained nothing long after it should have reached its goal; the goal's
         neighbourhood stops being a candidate and the robot waits for the next decision."""
-        r = max(1, round(self.mission_cfg.oscillation_radius_m / 4 / self.truth.resolution_m))
-        g = self.goals[i]
-        self.blacklist[max(0, g[0] - r) : g[0] + r + 1, max(0, g[1] - r) : g[1] + r + 1] = True
+        self._blacklist_around(self.goals[i])
         self.goals[i] = NO_GOAL
         self.routes[i] = _NO_ROUTE
         self.sim.set_path(i, _NO_ROUTE)
         self._release(i)
         self.stalls += 1
+
+    def _blacklist_around(self, goal: NDArray[np.int32]) -> None:
+        """The cells within ``oscillation_radius_m`` / 4 of ``goal`` stop being candidates."""
+        r = max(1, round(self.mission_cfg.oscillation_radius_m / 4 / self.truth.resolution_m))
+        self.blacklist[max(0, goal[0] - r) : goal[0] + r + 1, max(0, goal[1] - r) : goal[1] + r + 1] = True
 
     def _keeps_goal(self, i: int, goal: NDArray[np.int32]) -> bool:
         """Whether robot i keeps its current goal instead of ``goal`` (oscillation breaking): it does when
@@ -517,6 +522,11 @@ class Mission:
                 continue  # failed, or out of range: the assignment never arrives
             path = decision.paths[i]
             goal = decision.goals_rc[i]
+            if goal[0] >= 0 and len(path) == 0 and self.strategy.goals_are_frontiers:
+                # The centre chose a goal it found no path to (its distance was an estimate on a large map):
+                # explore_lite blacklists such goals; kept, the same choice would come back every decision.
+                self._blacklist_around(goal)
+                self.pathless_goals += 1
             if self._keeps_goal(i, goal):
                 continue  # committed: drives on to its goal, whatever this decision says
             if len(path) and not np.array_equal(path[0], self.sim.positions_rc[i]):
