@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -27,6 +28,19 @@ from mrexplore.strategies import make_strategy
 
 PHASES = ((0.0, 0.25), (0.25, 0.75), (0.75, 0.99), (0.99, 1.01))
 """Coverage bounds of the phases, [low, high)."""
+
+
+class _Seen(NamedTuple):
+    """What one decision offered and chose."""
+
+    coverage: float
+    clusters: int
+    assigned: int
+    """Robots given a cluster."""
+    distinct: int
+    """Distinct clusters among theirs."""
+    nearest_m: np.ndarray
+    """Each goal's distance to the nearest other goal (:func:`nearest_other_m`)."""
 
 
 def nearest_other_m(goals_rc: np.ndarray, resolution_m: float) -> np.ndarray:
@@ -57,7 +71,7 @@ def main() -> int:
         truth, make_strategy(args.strategy), SimConfig(robots=args.robots), seed=args.seed, progress=False
     )
     t0 = time.perf_counter()
-    rows: list[tuple[float, int, int, int, np.ndarray]] = []
+    rows: list[_Seen] = []
     while mission.advance():
         coverage = mission.curve[-1]
         decision = mission.decide()
@@ -66,15 +80,8 @@ def main() -> int:
         chosen = decision.assignment.cluster_of_robot
         chosen = chosen[chosen != UNASSIGNED]
         goals = decision.goals_rc[decision.goals_rc[:, 0] >= 0]
-        rows.append(
-            (
-                coverage,
-                len(decision.clusters),
-                len(chosen),
-                len(set(chosen.tolist())),
-                nearest_other_m(goals, truth.resolution_m),
-            )
-        )
+        near = nearest_other_m(goals, truth.resolution_m)
+        rows.append(_Seen(coverage, len(decision.clusters), len(chosen), len(set(chosen.tolist())), near))
     print(
         f"{truth.name}, {args.strategy}, {args.robots} robots, seed {args.seed}: {mission.steps} steps, "
         f"{len(rows)} decisions, {time.perf_counter() - t0:.0f} s\n"
@@ -85,14 +92,14 @@ def main() -> int:
     )
     print("| --- | --- | --- | --- | --- | --- |")
     for lo, hi in PHASES:
-        sel = [r for r in rows if lo <= r[0] < hi]
+        sel = [r for r in rows if lo <= r.coverage < hi]
         if not sel:
             continue
-        near = np.concatenate([r[4] for r in sel])
+        near = np.concatenate([r.nearest_m for r in sel])
         near = near[np.isfinite(near)]
-        own = np.mean([r[3] / max(r[2], 1) for r in sel])
+        own = np.mean([r.distinct / max(r.assigned, 1) for r in sel])
         print(
-            f"| {lo:.2f}-{min(hi, 1.0):.2f} | {len(sel)} | {np.mean([r[1] for r in sel]):.1f} | {own:.2f} "
+            f"| {lo:.2f}-{min(hi, 1.0):.2f} | {len(sel)} | {np.mean([r.clusters for r in sel]):.1f} | {own:.2f} "
             f"| {np.median(near):.1f} | {np.mean(near <= args.sensor_m):.2f} |"
         )
     return 0
