@@ -99,6 +99,35 @@ def test_a_passage_the_coarse_grid_closes_reads_inf_and_its_path_falls_back_to_a
     assert both[0].known and both[1].known  # read from the search back, not estimated
 
 
+def test_a_source_behind_a_closed_passage_gets_one_exact_search_for_every_cell_it_leaves(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # A wall down column 10 with a one-cell gap at row 15: robot B in the room left of it, robot A in the
+    # hall right of it. Pooled by 3 the gap closes, so B's field reaches nothing in the hall.
+    g = np.ones((30, 60), bool)
+    g[:, 10] = False
+    g[15, 10] = True
+    sources = np.array([[15, 2], [15, 40]])  # B, A
+    must = np.array([[3, 55], [27, 55], [15, 58]])  # hall cells beyond A's exact radius
+    grid = coarse_grid(g, 3)
+    assert grid is not None
+    alone = far_fields(g, sources, radius_cells=4, factor=3, grid=grid)
+    assert not np.isfinite(alone[0].at(must)).any() and np.isfinite(alone[1].at(must)).all()
+    searches: list[int] = []
+    exact_at = type(grid).exact_at
+
+    def counted(self: object, src: np.ndarray, cells: np.ndarray) -> np.ndarray:
+        searches.append(len(cells))
+        return exact_at(self, src, cells)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(type(grid), "exact_at", counted)
+    b, a = far_fields(g, sources, radius_cells=4, factor=3, must_rc=must, grid=grid)
+    assert searches == [3]  # one search from B for its three cells, none back from each cell
+    want = distance_fields(g, sources[:1])[0].at(must)
+    np.testing.assert_allclose(b.at(must), want, rtol=1e-6)  # exact through the gap
+    np.testing.assert_array_equal(a.at(must), alone[1].at(must))  # A keeps its own estimates
+
+
 @settings(max_examples=20, deadline=None)
 @given(st.integers(0, 10**6))
 def test_paths_to_far_goals_are_valid_and_near_shortest(seed: int) -> None:
