@@ -4,6 +4,7 @@ radius, and the pooling."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -17,6 +18,7 @@ from mrexplore.paths.distance_field import _Searches, distance_fields
 from mrexplore.paths.far_field import (
     Field,
     NearFarField,
+    _fewest_searches,
     _seeded_search,
     coarse_grid,
     far_fields,
@@ -126,6 +128,21 @@ def test_a_source_behind_a_closed_passage_gets_one_exact_search_for_every_cell_i
     want = distance_fields(g, sources[:1])[0].at(must)
     np.testing.assert_allclose(b.at(must), want, rtol=1e-6)  # exact through the gap
     np.testing.assert_array_equal(a.at(must), alone[1].at(must))  # A keeps its own estimates
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(1, 5), st.integers(1, 6), st.integers(0, 10**6))
+def test_the_searches_chosen_cover_every_pair_left_at_inf_and_are_as_few_as_can_be(n: int, k: int, seed: int) -> None:
+    pairs = np.random.default_rng(seed).random((n, k)) < 0.4
+    rows, cols = _fewest_searches(pairs)
+    assert not (pairs & ~rows[:, None] & ~cols[None, :]).any()  # every pair searched from one end
+    # The fewest: over every set of rows, the columns it leaves to search.
+    fewest = min(
+        len(chosen) + int(np.count_nonzero(pairs[[i for i in range(n) if i not in chosen]].any(axis=0)))
+        for m in range(n + 1)
+        for chosen in itertools.combinations(range(n), m)
+    )
+    assert rows.sum() + cols.sum() == fewest
 
 
 @settings(max_examples=20, deadline=None)

@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 import numba as nb
 import numpy as np
 from numpy.typing import NDArray
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import maximum_bipartite_matching
 
 from mrexplore.boxes import mask_box
 from mrexplore.paths.distance_field import (
@@ -363,6 +365,34 @@ def _one(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius:
     return NearFarField(near, float(radius), coarse, grid, seed_key)
 
 
+def _fewest_searches(pairs: NDArray[np.bool_]) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """Rows (sources) and columns (cells) of ``(n, k) bool`` ``pairs`` such that every True lies in one of
+    them, as few as can be: a minimum vertex cover of the bipartite graph, by Kőnig's theorem from a
+    maximum matching. Columns are taken where rows save nothing (a column's search may end early, below).
+
+    Examples
+    --------
+    >>> apart = np.array([[0, 0, 1, 0], [1, 1, 1, 1], [0, 0, 1, 0]], bool)  # source 1 leaves every cell
+    >>> [m.nonzero()[0].tolist() for m in _fewest_searches(apart)]  # one search from it, one back from cell 2
+    [[1], [2]]
+    """
+    n, k = pairs.shape
+    match = maximum_bipartite_matching(csr_matrix(pairs.T.astype(np.int8)), perm_type="column")  # cell -> source
+    owner = np.full(n, -1, dtype=np.int64)  # source -> the cell matched to it
+    owner[match[match >= 0]] = np.flatnonzero(match >= 0)
+    # Kőnig: from the unmatched cells, alternate along unmatched edges to sources and matched edges back.
+    seen_cells, seen_sources = match < 0, np.zeros(n, dtype=bool)
+    todo = np.flatnonzero(seen_cells).tolist()
+    while todo:
+        j = todo.pop()
+        for i in np.flatnonzero(pairs[:, j] & ~seen_sources).tolist():
+            seen_sources[i] = True
+            if owner[i] >= 0 and not seen_cells[owner[i]]:
+                seen_cells[owner[i]] = True
+                todo.append(int(owner[i]))
+    return seen_sources, pairs.any(axis=0) & ~seen_cells
+
+
 def coarse_grid(passable: BoolGrid, factor: int) -> CoarseGrid | None:
     """``passable`` pooled into ``factor`` x ``factor`` blocks, for :func:`far_fields` calls on the same grid to
     share (pooling a KTH floor at 0.05 m takes about 3 ms); None where no cell is passable.
@@ -391,12 +421,12 @@ def far_fields(
     cells beyond.
 
     ``must_rc`` (``(k, 2) int``, e.g. cluster centres): cells every field must answer where the exact
-    search does. A source that leaves at ``inf`` two or more of them that another source reaches (it
-    stands behind a passage the coarse grid closes) gets one exact search, stopped at the cells it
-    leaves. Any other cell left at ``inf`` for some source (behind a passage itself) gets a near/far field
-    of its own, read at the sources (distances are symmetric; its exact part goes through the passage),
-    and an exact search from it to the sources that one leaves at ``inf`` too. Those values go into the
-    fields' :attr:`~NearFarField.known`. ``own_rc``: per source, cells only
+    search does. Where the coarse grid leaves some at ``inf`` (behind a passage it closes, or a source
+    behind one), the fewest sources and cells that cover every such pair are searched: a source by one
+    exact search stopped at the cells it leaves; a cell by a near/far field of its own, read at the
+    sources (distances are symmetric; its exact part goes through the passage), and an exact search from
+    it to the sources that one leaves at ``inf`` too (the other sources read the cell's field there).
+    Those values go into the fields' :attr:`~NearFarField.known`. ``own_rc``: per source, cells only
     that source must answer (its current goal); where the coarse grid leaves one at ``inf``, an exact
     search from the source stopped at them. ``grid``: :func:`coarse_grid` of the same ``passable`` and
     ``factor``, shared between calls (built here when None).
@@ -434,13 +464,12 @@ def far_fields(
     if must_rc is not None and len(must_rc) and len(fields):
         must = np.unique(np.asarray(must_rc, np.int64).reshape(-1, 2), axis=0)
         unread = ~np.isfinite(np.stack([f.at(must) for f in fields]))
-        # A source whose field leaves at inf two or more cells that another source's reaches stands apart
-        # from the coarse grid's network (its exact radius reaches no block joined to the rest; late on a
-        # KTH floor, one robot of 8 left most cluster centres at inf). One exact search from it, stopped at
-        # the cells it leaves, costs about what one search back from a cell below costs, and gives it the
-        # same exact distances; the other sources keep their own estimates at those cells.
-        reached = (~unread).any(axis=0)
-        apart = (unread & reached).sum(axis=1) >= 2
+        # Every (source, cell) pair left at inf needs an exact search: from the source (one search, stopped
+        # at all the cells it leaves) or back from the cell (below). A source standing apart from the coarse
+        # grid's network (its exact radius reaches no block joined to the rest) leaves most cells at inf:
+        # late on a KTH floor one robot of 8 left 15-19 centres, each searched back alone before. As few
+        # searches as cover every pair: a minimum vertex cover of the pairs (:func:`_fewest_searches`).
+        apart, back = _fewest_searches(unread)
         for i in np.flatnonzero(apart).tolist():
             cells: NDArray[np.int64] = must[unread[i]]
             if own_rc is not None and i < len(own_rc):  # its own goals in the same search
@@ -448,8 +477,7 @@ def far_fields(
                 cells = np.vstack([cells, own[~np.isfinite(fields[i].at(own))]])
             for cell, d in zip(cells, exact(sources[i], cells), strict=True):
                 fields[i].known[(int(cell[0]), int(cell[1]))] = float(d)
-        unread[apart] = False
-        for cell in must[unread.any(axis=0)]:
+        for cell in must[back]:
             # From the cell: exact through its passage, then the coarse grid; exact all the way if need be.
             key = (int(cell[0]), int(cell[1]))
             searched = np.array([key in f.known for f in fields])  # exact already, from its source
