@@ -1,0 +1,116 @@
+"""Record a mission's near/far distance calls late on a floor, then time any version of them on the same calls.
+
+    python perf/replay_far_fields.py record --map ../shared/maps/kth_floorplans/50010535_PLAN2.yaml \
+        --robots 8 --from-coverage 0.5 --calls 6 --out plan2.pkl
+    python perf/replay_far_fields.py replay plan2.pkl              # this checkout
+    PYTHONPATH=/tmp/before/src python perf/replay_far_fields.py replay plan2.pkl   # another one
+
+``record`` runs one `hier` mission (0.05 m, seed 0) untimed until the team's coverage reaches
+``--from-coverage``, then keeps the arguments of the next ``--calls`` calls of ``far_fields`` (the robots'
+distances at a decision on a large floor): the passable grid, the robots, the cluster centres, the robots'
+own goals. ``replay`` runs each kept call through the ``far_fields`` of whatever checkout it imports, twice
+(the first run may compile numba's caches), and prints the second run's milliseconds per call and how many
+exact searches and near/far fields it made. Versions compared this way see the same calls, which whole
+missions do not once they part. The recording is a pickle of numpy arrays; read only files you made.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pickle
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import mrexplore.paths.far_field as far_field
+import mrexplore.strategies as strategies
+from mrexplore.cli import run_script
+from mrexplore.config import MapConfig, MissionConfig, SimConfig
+from mrexplore.maps.loaders import load_map
+from mrexplore.mission import Mission
+
+
+def _record(args: argparse.Namespace) -> None:
+    truth = load_map(args.map, MapConfig(resolution_m=0.05))
+    sim = SimConfig(robots=args.robots)
+    mission = Mission(truth, strategies.make_strategy("hier"), sim, MissionConfig(100_000), 0, progress=False)
+    while mission.advance():
+        mission.decide()
+        if mission.curve[-1] >= args.from_coverage:
+            break
+    calls: list[dict[str, Any]] = []
+    original = strategies.far_fields
+
+    def keep(passable: np.ndarray, sources: np.ndarray, radius: int, factor: int, *rest: Any) -> Any:
+        must, own = (list(rest) + [None, None])[:2]
+        calls.append(
+            {
+                "passable": np.packbits(passable),
+                "shape": passable.shape,
+                "sources": np.asarray(sources),
+                "radius": radius,
+                "factor": factor,
+                "must": None if must is None else np.asarray(must),
+                "own": None if own is None else [np.asarray(o) for o in own],
+            }
+        )
+        return original(passable, sources, radius, factor, *rest)
+
+    strategies.far_fields = keep  # type: ignore[assignment]
+    while len(calls) < args.calls and mission.advance():
+        mission.decide()
+    strategies.far_fields = original
+    with open(args.out, "wb") as f:
+        pickle.dump(calls, f)
+    print(f"{len(calls)} calls from step {mission.steps} to {args.out}")
+
+
+def _replay(args: argparse.Namespace) -> None:
+    with open(args.calls, "rb") as f:
+        calls = pickle.load(f)  # noqa: S301 - a recording this script made
+    counts: dict[str, int] = {}
+
+    def counted(name: str, fn: Callable[..., Any]) -> Callable[..., Any]:
+        def wrapper(*a: Any, **k: Any) -> Any:
+            counts[name] = counts.get(name, 0) + 1
+            return fn(*a, **k)
+
+        return wrapper
+
+    far_field.CoarseGrid.exact_at = counted("exact searches", far_field.CoarseGrid.exact_at)  # type: ignore[method-assign]
+    far_field._one = counted("near/far fields", far_field._one)
+    print(f"far_fields from {far_field.__file__}")
+    for c in calls:
+        h, w = c["shape"]
+        passable = np.unpackbits(c["passable"])[: h * w].reshape(h, w).astype(bool)
+        for _ in range(2):  # the second run is timed: the first may compile
+            grid = far_field.coarse_grid(passable, c["factor"])
+            counts.clear()
+            t = time.perf_counter()
+            far_field.far_fields(passable, c["sources"], c["radius"], c["factor"], c["must"], c["own"], grid)
+            ms = 1e3 * (time.perf_counter() - t)
+        made = ", ".join(f"{n} {k}" for k, n in sorted(counts.items()))
+        print(f"{ms:8.1f} ms  ({len(c['sources'])} robots, {len(c['must'])} centres; {made})")
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="what", required=True)
+    rec = sub.add_parser("record")
+    rec.add_argument("--map", type=Path, required=True)
+    rec.add_argument("--robots", type=int, default=8)
+    rec.add_argument("--from-coverage", type=float, default=0.5)
+    rec.add_argument("--calls", type=int, default=6)
+    rec.add_argument("--out", type=Path, required=True)
+    rep = sub.add_parser("replay")
+    rep.add_argument("calls", type=Path)
+    args = ap.parse_args()
+    _record(args) if args.what == "record" else _replay(args)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(run_script(main))
