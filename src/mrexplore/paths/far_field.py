@@ -376,7 +376,7 @@ def _fewest_searches(pairs: NDArray[np.bool_]) -> tuple[NDArray[np.bool_], NDArr
     >>> [m.nonzero()[0].tolist() for m in _fewest_searches(apart)]  # one search from it, one back from cell 2
     [[1], [2]]
     """
-    n, k = pairs.shape
+    n = pairs.shape[0]
     match = maximum_bipartite_matching(csr_matrix(pairs.T.astype(np.int8)), perm_type="column")  # cell -> source
     owner = np.full(n, -1, dtype=np.int64)  # source -> the cell matched to it
     owner[match[match >= 0]] = np.flatnonzero(match >= 0)
@@ -467,7 +467,7 @@ def far_fields(
         # Every (source, cell) pair left at inf needs an exact search: from the source (one search, stopped
         # at all the cells it leaves) or back from the cell (below). A source standing apart from the coarse
         # grid's network (its exact radius reaches no block joined to the rest) leaves most cells at inf:
-        # late on a KTH floor one robot of 8 left 15-19 centres, each searched back alone before. As few
+        # late on a KTH floor one robot of 8 left 17-19 of 18-20 centres, each searched back alone before. As few
         # searches as cover every pair: a minimum vertex cover of the pairs (:func:`_fewest_searches`).
         apart, back = _fewest_searches(unread)
         for i in np.flatnonzero(apart).tolist():
