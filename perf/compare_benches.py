@@ -38,6 +38,36 @@ def _episode(row: dict[str, str]) -> tuple[str, str, str]:
     return row["map_path"], row["robots"], row["seed"]
 
 
+_NOT_RESULTS = frozenset(
+    {"plan_ms_mean", "plan_ms_p95", "wall_s", "peak_mb", "onboard_ms_median", "onboard_ms_p95"}  # timings
+    | {"strategy", "settings", "policy_sha256", "map_path", "map_resolved"}  # which run it is
+)
+"""Columns left out when asking whether two runs of an episode are the same mission."""
+
+
+def _same_missions(rows: list[dict[str, str]], labels: list[str]) -> str:
+    """Per other run: the episodes it shares with the reference, how many differ in any result (every
+    column but timings and the run's identity), and the planning time of the shared episodes summed
+    (``plan_ms_mean`` x ``decisions``; a timing, so it moves with the machine too)."""
+    by = {label: {_episode(r): r for r in rows if r["strategy"] == label} for label in labels}
+    ref = by[labels[0]]
+
+    def planning_s(r: dict[str, str]) -> float:
+        return float(r["plan_ms_mean"]) * int(r["decisions"]) / 1e3
+
+    lines = [
+        f"| run | shared episodes | results differ | planning s, {labels[0]} → run |",
+        "| --- | --- | --- | --- |",
+    ]
+    for label in labels[1:]:
+        shared = [e for e in by[label] if e in ref]
+        differ = sum(any(ref[e][c] != by[label][e].get(c) for c in ref[e] if c not in _NOT_RESULTS) for e in shared)
+        before = sum(planning_s(ref[e]) for e in shared)
+        after = sum(planning_s(by[label][e]) for e in shared)
+        lines.append(f"| {label} | {len(shared)} | {differ} | {before:,.0f} → {after:,.0f} |")
+    return "\n".join(lines)
+
+
 def _kept(train_dir: Path) -> tuple[str, str, str]:
     """The stage with the fewest validation steps (the trainer keeps it), its steps and the untrained
     baseline's."""
@@ -94,6 +124,8 @@ def main(argv: list[str] | None = None) -> int:
         paired_table(rows, labels[0], labels, key="dataset"),
         "At equal coverage (steps to 99%):",
         paired_table(rows, labels[0], labels, key="dataset", metric="steps_to_99"),
+        f"## The same missions? Each run against {labels[0]}, episode by episode",
+        _same_missions(rows, labels),
     ]
     text = "\n\n".join(parts) + "\n"
     if args.out:
