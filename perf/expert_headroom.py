@@ -2,9 +2,15 @@
 the same maps, seeds and starts (paired), per dataset.
 
 Run: python perf/expert_headroom.py [--maps 6] [--robots 3] [--seeds 1] [--workers 2] [--datasets houseexpo,dungeon]
+                                    [--world truth|known]
 It picks the first ``--maps`` maps by name of each dev dataset (HouseExpo PNGs, DungeonMaps) at 0.1 m. The
 expert may use the simulator (training only): at each decision it runs its candidates (the heuristic's,
 nearest's and noisy utility assignments) forward over the training horizon and takes the best return.
+
+``--world known`` asks how much of that headroom needs the truth: the candidates run forward in the world
+the team knows at the decision, every cell it has not observed a wall, and each is scored by the steps
+until no frontier is left (the horizon where that takes longer); ties go to the heuristic's own choice.
+Such an expert sees nothing a robot team could not, so what it gains a planner could gain at run time.
 """
 
 from __future__ import annotations
@@ -20,7 +26,7 @@ import numpy as np
 from mrexplore.bench.report import paired_bootstrap
 from mrexplore.cli import run_script
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig, TrainConfig
-from mrexplore.global_planning.learned.expert import candidate_assignments, lookahead_returns
+from mrexplore.global_planning.learned.expert import candidate_assignments, known_world_returns, lookahead_returns
 from mrexplore.global_planning.protocol import Assignment
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission
@@ -29,9 +35,9 @@ from mrexplore.strategies import make_strategy
 MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
 
 
-def episode(args: tuple[str, int, int, bool]) -> int:
+def episode(args: tuple[str, int, int, bool, str]) -> int:
     """Steps of one episode, the expert deciding (True) or hier-heuristic alone (False)."""
-    path, robots, seed, expert = args
+    path, robots, seed, expert, world = args
     cfg = TrainConfig()
     truth = load_map(path, MapConfig(resolution_m=cfg.resolution_m))
     pipeline = make_strategy("hier-heuristic")
@@ -46,7 +52,8 @@ def episode(args: tuple[str, int, int, bool]) -> int:
             heuristic = GlobalPlanningConfig()
             cands = candidate_assignments(problem, own, heuristic, cfg.noisy_candidates, cfg.noise_m, rng)
             if len(cands) > 1:
-                returns = lookahead_returns(m, cands, cfg.horizon_steps, pipeline.planner)
+                lookahead = known_world_returns if world == "known" else lookahead_returns
+                returns = lookahead(m, cands, cfg.horizon_steps, pipeline.planner)
                 own = Assignment(cands[int(np.argmax(returns))])
         m.commit(own)
     return m.steps
@@ -59,6 +66,7 @@ def main() -> int:
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--datasets", default="houseexpo,dungeon", help="comma-separated: houseexpo, dungeon")
+    ap.add_argument("--world", choices=("truth", "known"), default="truth", help="where candidates run forward")
     args = ap.parse_args()
     if not MAPS.is_dir():
         print(f"skipped: dev maps not found at {MAPS}", file=sys.stderr)
@@ -71,7 +79,8 @@ def main() -> int:
     ctx = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(args.workers, mp_context=ctx) as pool:
         for name, paths in sets.items():
-            jobs = [(str(p), args.robots, s, e) for p in paths for s in range(args.seeds) for e in (False, True)]
+            runs = [(str(p), s) for p in paths for s in range(args.seeds)]
+            jobs = [(path, args.robots, s, e, args.world) for path, s in runs for e in (False, True)]
             steps = list(pool.map(episode, jobs))
             base, exp = steps[0::2], steps[1::2]
             est, lo, hi = paired_bootstrap(exp, base)

@@ -616,6 +616,11 @@ class TrainConfig(_Checked):
     """Each expert candidate is run this many simulation steps forward, >= 1. Short horizons are myopic:
     with 120, candidates that grab open area and leave pockets behind ranked first, and the student got
     worse round after round (validation 482 -> 620 steps over 6 rounds; 470 -> 487 over 3 with 400)."""
+    expert_world: str = "truth"
+    """Where the expert runs its candidates forward: ``truth`` (the simulator's map, scored by eq. 9's
+    return over ``horizon_steps``) or ``known`` (the world the team has observed, every unseen cell a
+    wall, scored by minus the steps until no frontier is left; labels a student could learn from what it
+    sees: :func:`~mrexplore.global_planning.learned.expert.known_world_returns`)."""
     noisy_candidates: int = 4
     """Noisy utility assignments among the expert's candidates, >= 0."""
     noise_m: float = 4.0
@@ -672,6 +677,7 @@ class TrainConfig(_Checked):
         _require(self.val_maps >= 1, "val_maps", ">= 1", self.val_maps)
         _require(self.val_robots >= 1, "val_robots", ">= 1", self.val_robots)
         _require(self.score in ("steps", "relative"), "score", "'steps' or 'relative'", self.score)
+        _require(self.expert_world in ("truth", "known"), "expert_world", "'truth' or 'known'", self.expert_world)
         for name in ("search_generations", "dagger_rounds", "noisy_candidates", "ppo_iterations"):
             _require(getattr(self, name) >= 0, name, ">= 0", getattr(self, name))
         for name in (

@@ -103,6 +103,13 @@ class ExplorationSim:
         self.paths[robot] = _EMPTY_PATH
         self._path_index[robot] = 0
 
+    def use_walls(self, occupied: BoolGrid) -> None:
+        """Scans and moves see ``occupied`` ``(H, W) bool`` as the walls from now on, not the truth's (a
+        lookahead's imagined world); the explorable region, and so coverage, stay the truth's."""
+        if occupied.shape != self._occupied.shape:
+            raise ValueError(f"walls of shape {occupied.shape} for a map of shape {self._occupied.shape}")
+        self._occupied = np.ascontiguousarray(occupied, dtype=bool)
+
     def remaining_path(self, robot: int) -> NDArray[np.int32]:
         """Cells still ahead of ``robot`` on its path, ``(k, 2) int32`` (its current cell first)."""
         return self.paths[robot][self._path_index[robot] :]

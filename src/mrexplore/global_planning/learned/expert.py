@@ -15,7 +15,14 @@ from mrexplore.global_planning.learned.features import GraphInputs
 from mrexplore.global_planning.protocol import Assignment, AssignmentProblem, GlobalPlanner
 from mrexplore.mission import Mission
 
-__all__ = ["ExpertLabel", "candidate_assignments", "lookahead_returns", "horizon_return", "privileged_scalars"]
+__all__ = [
+    "ExpertLabel",
+    "candidate_assignments",
+    "lookahead_returns",
+    "known_world_returns",
+    "horizon_return",
+    "privileged_scalars",
+]
 
 
 @dataclass(frozen=True)
@@ -80,6 +87,37 @@ def lookahead_returns(
             while mission.advance():
                 mission.decide()
             returns[j] = horizon_return(mission, start_steps, start_known)
+    finally:
+        mission.strategy.planner = own
+        mission.restore(snap)
+    return returns
+
+
+def known_world_returns(
+    mission: Mission, candidates: list[NDArray[np.int64]], horizon_steps: int, continuation: GlobalPlanner
+) -> NDArray[np.float64]:
+    """Minus the steps each candidate takes until no frontier is left (``horizon_steps`` where that takes
+    longer), run forward as :func:`lookahead_returns` runs them but in the world the team has observed:
+    every cell no robot has seen is a wall to the rollout's scans. Nothing the team has not seen enters
+    the score, so it ranks candidates by what a robot team could know at the decision. The mission is left
+    as it was (posed)."""
+    snap = mission.snapshot()
+    own = mission.strategy.planner
+    sim = mission.sim
+    known = np.ascontiguousarray(np.where(sim.team_observed, mission.truth.occupied, True))
+    start = mission.steps
+    budget = min(mission.mission_cfg.max_steps, start + horizon_steps)
+    returns = np.zeros(len(candidates))
+    mission.strategy.planner = continuation
+    try:
+        for j, cand in enumerate(candidates):
+            mission.restore(snap)
+            mission.sim.use_walls(known)
+            mission.mission_cfg = replace(mission.mission_cfg, max_steps=budget)
+            mission.commit(Assignment(cand))
+            while mission.advance():
+                mission.decide()
+            returns[j] = -float(mission.steps - start)
     finally:
         mission.strategy.planner = own
         mission.restore(snap)

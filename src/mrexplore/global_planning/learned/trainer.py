@@ -34,6 +34,7 @@ from mrexplore.global_planning.learned.curve import plot_learning_curve
 from mrexplore.global_planning.learned.expert import (
     ExpertLabel,
     candidate_assignments,
+    known_world_returns,
     lookahead_returns,
     privileged_scalars,
 )
@@ -222,7 +223,8 @@ def _run_expert(job: _Job, net: MultiGraphNet) -> dict[str, Any]:
         if decisions % cfg.label_every == 0 and problem.n_clusters > 1:
             cands = candidate_assignments(problem, own, student.heuristic, cfg.noisy_candidates, cfg.noise_m, rng)
             if len(cands) > 1:
-                returns = lookahead_returns(m, cands, cfg.horizon_steps, continuation)
+                lookahead = known_world_returns if cfg.expert_world == "known" else lookahead_returns
+                returns = lookahead(m, cands, cfg.horizon_steps, continuation)
                 gains.append(float(returns.max() - returns[0]))  # candidate 0 is the student's own
                 if np.ptp(returns) > 0:  # a decision where every candidate is as good teaches nothing
                     g = graph_inputs(problem, net.cfg, student.heuristic)  # the inputs alone, no forward pass

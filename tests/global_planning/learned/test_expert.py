@@ -1,0 +1,49 @@
+"""The known-world expert: it scores candidates by nothing the team has not seen, leaves the mission as it
+was, and ranks a team that stands idle below the heuristic's choice."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from mrexplore.config import MapConfig, SimConfig
+from mrexplore.global_planning.learned.expert import known_world_returns
+from mrexplore.global_planning.protocol import UNASSIGNED
+from mrexplore.maps.loaders import load_map
+from mrexplore.mission import Mission
+from mrexplore.strategies import make_strategy
+
+
+def _posed_mission() -> Mission:
+    truth = load_map("generated:2", MapConfig(resolution_m=0.1))
+    m = Mission(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=4, progress=False)
+    for _ in range(3):
+        assert m.advance()
+        m.decide()
+    assert m.advance()
+    assert m.pose() is not None
+    return m
+
+
+def test_known_world_returns_ignore_the_unseen_and_leave_the_mission_as_it_was() -> None:
+    m = _posed_mission()
+    problem = m.pose()
+    assert problem is not None and problem.n_clusters > 1
+    heuristic = m.strategy.planner.assign(problem).cluster_of_robot
+    idle = np.full(problem.n_robots, UNASSIGNED, dtype=np.int64)
+    before = (m.steps, m.sim.positions_rc.copy(), m.sim.team_observed.copy(), m.sim.known_cells)
+    continuation = make_strategy("hier-heuristic").planner
+    returns = known_world_returns(m, [heuristic, idle], 400, continuation)
+    assert (m.steps, m.sim.known_cells) == (before[0], before[3])
+    assert np.array_equal(m.sim.positions_rc, before[1]) and np.array_equal(m.sim.team_observed, before[2])
+    # every unseen cell of the world flipped (the map and what the simulator's scans see): the same
+    # scores, so nothing unseen reached them (rollouts in the simulator's own world score [-149, -174])
+    unseen = ~m.sim.team_observed
+    assert unseen.any()
+    flipped = np.where(unseen, ~m.truth.occupied, m.truth.occupied)
+    m.truth = replace(m.truth, occupied=flipped)
+    m.sim.use_walls(flipped)
+    assert known_world_returns(m, [heuristic, idle], 400, continuation).tolist() == returns.tolist()
+    # minus the steps until no frontier is left: the idle team waits for its next decision first
+    assert -400 < returns[1] < returns[0] < 0  # -126 and -101 here
