@@ -99,7 +99,8 @@ def known_world_returns(
     """Minus the steps each candidate takes until no frontier is left (``horizon_steps`` where that takes
     longer), run forward as :func:`lookahead_returns` runs them but in the world the team has observed:
     every cell no robot has seen is a wall to the rollout's scans. Nothing the team has not seen enters
-    the score, so it ranks candidates by what a robot team could know at the decision. The mission is left
+    the score, so it ranks candidates by what a robot team could know at the decision (the seen cells are
+    taken from the truth: the beliefs' rare misread cells aside, what the team knows). The mission is left
     as it was (posed)."""
     snap = mission.snapshot()
     own = mission.strategy.planner
