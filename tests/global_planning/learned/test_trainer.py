@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -106,6 +107,24 @@ def test_validate_policy_gives_steps_to_the_end_and_to_99_per_map_in_order() -> 
     assert (steps[1] <= steps[0]).all() and (cov >= 0.99).all()  # both explored: 99% comes before the end
     # an episode's seed is its position: the first map alone runs the same episode again
     alone = validate_policy(None, replace(TINY, max_steps=400), None, workers=1, maps=maps[:1])[1]
+    assert alone[:, 0].tolist() == steps[:, 0].tolist()
+
+
+def test_validation_comes_back_in_the_maps_order_whatever_finishes_first(monkeypatch: pytest.MonkeyPatch) -> None:
+    # Workers hand results back as they finish; a runner that hands them back last first stands in for that.
+    from dataclasses import replace
+
+    from mrexplore.global_planning.learned import trainer as tr
+
+    def last_first(self: object, jobs: list, deadline: float) -> Iterator[dict]:
+        yield from reversed([tr._run_job(j) for j in jobs])
+
+    monkeypatch.setattr(tr._Runner, "run", last_first)
+    cfg = replace(TINY, max_steps=400)
+    maps = [f"varied:{tr.FRESH_SEED0 + i}" for i in (0, 1)]
+    steps = tr.validate_policy(None, cfg, None, workers=1, maps=maps)[1]
+    alone = tr.validate_policy(None, cfg, None, workers=1, maps=maps[:1])[1]  # the same first episode
+    assert steps[0, 0] != steps[0, 1]  # 214 and 120 steps: an order mixed up would show
     assert alone[:, 0].tolist() == steps[:, 0].tolist()
 
 

@@ -820,7 +820,7 @@ def train(
 
         def validate(weights: bytes | None, kind: str = "eval") -> tuple[float, float, np.ndarray]:
             """Mean steps and coverage, and the steps to the end and to 99% per map (2 x maps, in order)."""
-            jobs = placed([_Job(kind, m, cfg.val_robots, i, weights, cfg) for i, m in enumerate(val_maps)])
+            jobs = placed([_Job(kind, m, cfg.val_robots, i, weights, cfg, i) for i, m in enumerate(val_maps)])
             res = runner.results(jobs, math.inf)
             per_map = np.array([[r["steps"] for r in res], [r["steps_99"] for r in res]], dtype=np.float64)
             return float(per_map[0].mean()), float(np.mean([r["coverage"] for r in res])), per_map
@@ -985,7 +985,7 @@ def validate_policy(
         weights = _weights(load_policy(policy).net)
     val_maps = maps if maps is not None else split_maps(train_dir, cfg.val_maps, cfg.plans)[1]
     with _Runner(workers, None) as runner:
-        jobs = [_Job("eval", m, cfg.val_robots, i, weights, cfg) for i, m in enumerate(val_maps)]
+        jobs = [_Job("eval", m, cfg.val_robots, i, weights, cfg, i) for i, m in enumerate(val_maps)]
         res = runner.results(jobs, math.inf)
     steps = np.array([[r["steps"] for r in res], [r["steps_99"] for r in res]], dtype=np.float64)
     return val_maps, steps, np.array([r["coverage"] for r in res], dtype=np.float64)
