@@ -3,6 +3,7 @@ from the same decision and scored by the return of paper eq. 9 over a horizon.""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -67,10 +68,16 @@ def horizon_return(mission: Mission, start_steps: int, start_known: int) -> floa
     return float(r.time_reward * steps + r.area_weight * new_m2)
 
 
-def lookahead_returns(
-    mission: Mission, candidates: list[NDArray[np.int64]], horizon_steps: int, continuation: GlobalPlanner
+def _roll_forward(
+    mission: Mission,
+    candidates: list[NDArray[np.int64]],
+    horizon_steps: int,
+    continuation: GlobalPlanner,
+    score: Callable[[Mission, int, int], float],
+    walls: NDArray[np.bool_] | None = None,
 ) -> NDArray[np.float64]:
-    """Return of each candidate: commit it at the posed decision, then let ``continuation`` decide until
+    """``score(mission, start steps, start known cells)`` of each candidate: commit it at the posed
+    decision (the rollout's scans seeing ``walls`` where given), then let ``continuation`` decide until
     ``horizon_steps`` steps passed or the mission ended. The mission is left as it was (posed)."""
     snap = mission.snapshot()
     own = mission.strategy.planner
@@ -81,16 +88,27 @@ def lookahead_returns(
     try:
         for j, cand in enumerate(candidates):
             mission.restore(snap)
+            if walls is not None:
+                mission.sim.use_walls(walls)
             # The horizon as a step budget, so every candidate is measured over the same steps (restored after).
             mission.mission_cfg = replace(mission.mission_cfg, max_steps=budget)
             mission.commit(Assignment(cand))
             while mission.advance():
                 mission.decide()
-            returns[j] = horizon_return(mission, start_steps, start_known)
+            returns[j] = score(mission, start_steps, start_known)
     finally:
         mission.strategy.planner = own
         mission.restore(snap)
     return returns
+
+
+def lookahead_returns(
+    mission: Mission, candidates: list[NDArray[np.int64]], horizon_steps: int, continuation: GlobalPlanner
+) -> NDArray[np.float64]:
+    """Return of each candidate: commit it at the posed decision, then let ``continuation`` decide until
+    ``horizon_steps`` steps passed or the mission ended; scored by :func:`horizon_return`. The mission is
+    left as it was (posed)."""
+    return _roll_forward(mission, candidates, horizon_steps, continuation, horizon_return)
 
 
 def known_world_returns(
@@ -102,27 +120,12 @@ def known_world_returns(
     the score, so it ranks candidates by what a robot team could know at the decision (the seen cells are
     taken from the truth: the beliefs' rare misread cells aside, what the team knows). The mission is left
     as it was (posed)."""
-    snap = mission.snapshot()
-    own = mission.strategy.planner
-    sim = mission.sim
-    known = np.ascontiguousarray(np.where(sim.team_observed, mission.truth.occupied, True))
-    start = mission.steps
-    budget = min(mission.mission_cfg.max_steps, start + horizon_steps)
-    returns = np.zeros(len(candidates))
-    mission.strategy.planner = continuation
-    try:
-        for j, cand in enumerate(candidates):
-            mission.restore(snap)
-            mission.sim.use_walls(known)
-            mission.mission_cfg = replace(mission.mission_cfg, max_steps=budget)
-            mission.commit(Assignment(cand))
-            while mission.advance():
-                mission.decide()
-            returns[j] = -float(mission.steps - start)
-    finally:
-        mission.strategy.planner = own
-        mission.restore(snap)
-    return returns
+    known = np.where(mission.sim.team_observed, mission.truth.occupied, True)
+
+    def steps_taken(m: Mission, start_steps: int, start_known: int) -> float:
+        return -float(m.steps - start_steps)
+
+    return _roll_forward(mission, candidates, horizon_steps, continuation, steps_taken, known)
 
 
 def privileged_scalars(mission: Mission) -> NDArray[np.float32]:
