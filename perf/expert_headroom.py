@@ -43,6 +43,7 @@ def episode(args: tuple[str, int, int, bool, str]) -> int:
     pipeline = make_strategy("hier-heuristic")
     m = Mission(truth, pipeline, SimConfig(robots=robots), MissionConfig(max_steps=2000), seed, progress=False)
     rng = np.random.default_rng(seed)
+    lookahead = known_world_returns if world == "known" else lookahead_returns
     while m.advance():
         problem = m.pose()
         if problem is None:
@@ -52,7 +53,6 @@ def episode(args: tuple[str, int, int, bool, str]) -> int:
             heuristic = GlobalPlanningConfig()
             cands = candidate_assignments(problem, own, heuristic, cfg.noisy_candidates, cfg.noise_m, rng)
             if len(cands) > 1:
-                lookahead = known_world_returns if world == "known" else lookahead_returns
                 returns = lookahead(m, cands, cfg.horizon_steps, pipeline.planner)
                 own = Assignment(cands[int(np.argmax(returns))])
         m.commit(own)

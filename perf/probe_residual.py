@@ -93,6 +93,17 @@ def episode(args: tuple[list[float], dict[str, Any], str, int, int]) -> tuple[in
     return m.steps, m.sim.coverage
 
 
+def training_episodes(n: int, seed: int = 0) -> list[tuple[str, int, int]]:
+    """``n`` episodes (map, robots, seed) of the trainer's: half training-split DungeonMaps (never its
+    validation maps), half ``varied:`` plans of training seeds, 2-5 robots; ``seed`` draws them."""
+    cfg = TrainConfig()
+    dungeons, _ = split_maps(TRAIN, cfg.val_maps, cfg.plans)
+    rng = np.random.default_rng(seed)
+    maps = [dungeons[int(i)] for i in rng.choice(len(dungeons), n // 2, replace=False)]
+    maps += [f"{cfg.plans}:{int(s)}" for s in rng.integers(0, 1_000_000, n - len(maps))]
+    return [(m, int(rng.integers(cfg.robots_min, cfg.robots_max + 1)), int(rng.integers(0, 2**31 - 1))) for m in maps]
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--episodes", type=int, default=128)
@@ -120,12 +131,7 @@ def main() -> int:
         for v in settings:
             _run_config(v)  # a bad key fails here, before any episode runs
     runs = [(reference, v) for v in settings] if settings is not None else [(w, {}) for w in variants]
-    cfg = TrainConfig()
-    dungeons, _ = split_maps(TRAIN, cfg.val_maps, cfg.plans)
-    rng = np.random.default_rng(0)
-    maps = [dungeons[int(i)] for i in rng.choice(len(dungeons), args.episodes // 2, replace=False)]
-    maps += [f"{cfg.plans}:{int(s)}" for s in rng.integers(0, 1_000_000, args.episodes - len(maps))]
-    eps = [(m, int(rng.integers(cfg.robots_min, cfg.robots_max + 1)), int(rng.integers(0, 2**31 - 1))) for m in maps]
+    eps = training_episodes(args.episodes)
     ctx = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(args.workers, mp_context=ctx) as pool:
         base = list(pool.map(episode, [(reference, {}, *e) for e in eps]))

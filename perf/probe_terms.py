@@ -38,25 +38,23 @@ import sys
 import types
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import replace
-from pathlib import Path
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from probe_residual import TRAIN, training_episodes
 
 from mrexplore.bench.report import paired_bootstrap
 from mrexplore.cli import run_script
 from mrexplore.config import MissionConfig, SimConfig, TrainConfig
 from mrexplore.global_planning.learned.checkpoint import default_policy_path
 from mrexplore.global_planning.learned.policy import LearnedPlanner
-from mrexplore.global_planning.learned.trainer import _map, split_maps
+from mrexplore.global_planning.learned.trainer import _map
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 from mrexplore.mission import Mission
 from mrexplore.strategies import _NO_ROUTE, Decision, ExplorationPipeline, PosedDecision, _decision, make_strategy
 from mrexplore.types import MrExploreError
-
-TRAIN = Path(__file__).resolve().parents[2] / "shared" / "maps" / "train"
 
 Term = Callable[[AssignmentProblem], NDArray[np.float64]]
 TERMS: dict[str, Term] = {}
@@ -170,10 +168,11 @@ def distance_log(p: AssignmentProblem) -> NDArray[np.float64]:
     return np.where(np.isfinite(d), np.log1p(np.where(np.isfinite(d), d, 0.0)), 0.0)
 
 
+@dataclass
 class _TermsPlanner(LearnedPlanner):
     """The learned planner with extra cost terms (deterministic decoding)."""
 
-    terms: dict[str, float] = {}
+    terms: dict[str, float] = field(default_factory=dict)
 
     def _cost(self, problem: AssignmentProblem) -> Any:
         g, cost, value = super()._cost(problem)
@@ -219,9 +218,8 @@ def episode(args: tuple[dict[str, Any], str, int, int]) -> tuple[int, float, int
     cfg = TrainConfig()
     pipeline = make_strategy("hier")
     shipped: LearnedPlanner = pipeline.planner  # type: ignore[assignment]
-    planner = _TermsPlanner(shipped.net, shipped.heuristic)
-    planner.terms = {k: float(v) for k, v in variant.items() if k not in NOT_TERMS}
-    pipeline.planner = planner
+    terms = {k: float(v) for k, v in variant.items() if k not in NOT_TERMS}
+    pipeline.planner = _TermsPlanner(shipped.net, shipped.heuristic, terms=terms)
     if variant.get("split_shared"):
         pipeline.finish = types.MethodType(_split_shared_finish, pipeline)  # type: ignore[method-assign]
     truth = _map(spec, cfg.resolution_m)
@@ -253,12 +251,7 @@ def main() -> int:
     for v in [base, *variants] if isinstance(variants, list) else [variants]:
         if not isinstance(v, dict) or any(k not in known for k in v):
             raise MrExploreError(f"a variant must be a mapping of {', '.join(known)} to numbers, got {v!r}")
-    cfg = TrainConfig()
-    dungeons, _ = split_maps(TRAIN, cfg.val_maps, cfg.plans)
-    rng = np.random.default_rng(args.seed)
-    maps = [dungeons[int(i)] for i in rng.choice(len(dungeons), args.episodes // 2, replace=False)]
-    maps += [f"{cfg.plans}:{int(s)}" for s in rng.integers(0, 1_000_000, args.episodes - len(maps))]
-    eps = [(m, int(rng.integers(cfg.robots_min, cfg.robots_max + 1)), int(rng.integers(0, 2**31 - 1))) for m in maps]
+    eps = training_episodes(args.episodes, args.seed)
     print(f"policy {default_policy_path().name}, {len(eps)} episodes", flush=True)
     ctx = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(args.workers, mp_context=ctx) as pool:

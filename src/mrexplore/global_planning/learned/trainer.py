@@ -211,6 +211,7 @@ def _run_expert(job: _Job, net: MultiGraphNet) -> dict[str, Any]:
     student = LearnedPlanner(net)
     m = _mission(job, _pipeline(student))
     continuation = make_strategy("hier-heuristic").planner
+    lookahead = known_world_returns if cfg.expert_world == "known" else lookahead_returns
     rng = np.random.default_rng([job.seed, 7])
     labels: list[ExpertLabel] = []
     gains: list[float] = []
@@ -223,7 +224,6 @@ def _run_expert(job: _Job, net: MultiGraphNet) -> dict[str, Any]:
         if decisions % cfg.label_every == 0 and problem.n_clusters > 1:
             cands = candidate_assignments(problem, own, student.heuristic, cfg.noisy_candidates, cfg.noise_m, rng)
             if len(cands) > 1:
-                lookahead = known_world_returns if cfg.expert_world == "known" else lookahead_returns
                 returns = lookahead(m, cands, cfg.horizon_steps, continuation)
                 gains.append(float(returns.max() - returns[0]))  # candidate 0 is the student's own
                 if np.ptp(returns) > 0:  # a decision where every candidate is as good teaches nothing
