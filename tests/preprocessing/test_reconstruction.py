@@ -332,3 +332,118 @@ def test_a_delta_after_an_unsorted_full_map_keeps_every_cell() -> None:
     )
     centre.receive(delta)
     assert centre._cells[0].tolist() == [5, 7, 9]
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 10**6), st.sampled_from([1, 3, 5]), st.booleans())
+def test_the_centre_kept_between_rounds_equals_the_centre_rebuilt_from_scratch(
+    seed: int, closing: int, walled: bool
+) -> None:
+    """Robots whose grids change round by round in random boxes (cells seen, forgotten, flipped; free
+    space reaching the grid's edge or not), sending deltas: the grid the centre keeps and redoes where
+    deltas fell equals the one it rebuilds from every robot's whole map, every round."""
+    rng = np.random.default_rng(seed)
+    shape = (int(rng.integers(6, 28)), int(rng.integers(6, 28)))
+    n = int(rng.integers(1, 4))
+    truth = rng.choice(np.array([F, F, F, F, O], np.uint8), shape)
+    if walled:  # a map closed by walls, as the dev maps are: no free space on the grid's edge
+        truth[[0, -1], :] = O
+        truth[:, [0, -1]] = O
+    grids = [np.full(shape, U, np.uint8) for _ in range(n)]
+    senders = [RobotSender(i, shape) for i in range(n)]
+    centre = CentreMap(n, shape, closing_size_cells=closing)
+    for rnd in range(8):
+        for i in range(n):
+            r0, c0 = int(rng.integers(0, shape[0])), int(rng.integers(0, shape[1]))
+            r1, c1 = r0 + int(rng.integers(1, 9)), c0 + int(rng.integers(1, 9))
+            kind = rng.random()
+            if kind < 0.6:  # seen
+                grids[i][r0:r1, c0:c1] = truth[r0:r1, c0:c1]
+            elif kind < 0.8:  # forgotten
+                grids[i][r0:r1, c0:c1] = U
+            else:  # a few cells flip
+                box = grids[i][r0:r1, c0:c1]
+                flip = rng.random(box.shape) < 0.3
+                box[flip] = rng.choice(np.array([F, O, U], np.uint8), int(flip.sum()))
+            free = np.argwhere(grids[i] == F)
+            pos = tuple(int(v) for v in free[rng.integers(len(free))]) if len(free) else (0, 0)
+            full, delta = senders[i].send(grids[i], rnd, pos)  # type: ignore[arg-type]
+            message = decode(delta if rng.random() < 0.9 else full)
+            centre.receive(message)
+            senders[i].acknowledged(message)
+        if rng.random() < 0.7:  # the centre is not asked every round: deltas pile up
+            assert np.array_equal(centre.state(), centre.state_from_scratch())
+    assert np.array_equal(centre.state(), centre.state_from_scratch())
+
+
+def _kept_and_scratch(rounds: list[str], positions: list[tuple[int, int]]) -> tuple[np.ndarray, np.ndarray]:
+    """One robot sending the grids drawn in ``rounds``, a full map then deltas: the centre's kept grid and
+    the one it rebuilds from scratch after the last round."""
+    grids = [state_grid(g) for g in rounds]
+    centre = CentreMap(1, grids[0].shape, closing_size_cells=1)
+    acked, kept = None, None
+    for rnd, (grid, pos) in enumerate(zip(grids, positions, strict=True)):
+        full = sparse_frontier_map(grid, 0, rnd, pos)
+        centre.receive(full if acked is None else changed_since(acked, full, rnd - 1))
+        acked = full.code_grid()
+        kept = centre.state()
+    assert kept is not None
+    return kept, centre.state_from_scratch()
+
+
+@pytest.mark.parametrize("later", [(2, 4), (0, 8)])
+def test_a_robot_that_sees_the_whole_map_at_once_is_rebuilt_beyond_its_delta(later: tuple[int, int]) -> None:
+    # Round 1 codes change only round the old room and the one cell left unknown: the delta's box, grown
+    # by a cell, is columns 0..7. Column 8 turns free too, with no code of its own (interior cells). From
+    # the robot at (2, 4) the fill in the box steps out into a cell that was not free; from (0, 8), a seed
+    # outside the box lies outside the free space the centre held. Either way the centre fills it all.
+    kept, scratch = _kept_and_scratch(
+        [
+            """
+            ?????????
+            ?????????
+            ??#...???
+            ??#...???
+            ?????????
+            ?????????
+            """,
+            """
+            .........
+            .........
+            ..#......
+            .....?...
+            .........
+            .........
+            """,
+        ],
+        [(2, 4), later],
+    )
+    assert np.array_equal(kept, scratch)
+    assert int((kept == F).sum()) == 9 * 6 - 2
+
+
+def test_a_robot_that_forgets_free_space_reaching_the_grid_edge_is_rebuilt_whole() -> None:
+    # Its free space on the left reached the grid's edges round one unknown cell; forgetting it changes
+    # the codes of that cell's neighbours and of column 6 only, and the delta's box, grown by a cell, leaves
+    # out column 0. Free space on the grid's edge can change beyond any box: the robot is rebuilt whole.
+    kept, scratch = _kept_and_scratch(
+        [
+            """
+            .......#.#
+            .......#.#
+            ...?...#.#
+            .......#.#
+            .......#.#
+            """,
+            """
+            ???????#.#
+            ???????#.#
+            ???????#.#
+            ???????#.#
+            ???????#.#
+            """,
+        ],
+        [(0, 0), (0, 8)],
+    )
+    assert np.array_equal(kept, scratch)
+    assert np.array_equal(kept[:, :7] == U, np.ones((5, 7), bool))

@@ -17,9 +17,15 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import Box, grown_slices
+from mrexplore.boxes import Box, grown_slices, mask_box
 from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
-from mrexplore.preprocessing.scanline_fill import mark_coded_cells, scanline_fill
+from mrexplore.preprocessing.scanline_fill import (
+    entry_seeds,
+    fill_leaves_box,
+    mark_coded_cells,
+    occupied_in,
+    scanline_fill,
+)
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap, apply_delta
 from mrexplore.types import BoolGrid, CellState, GridRC, MrExploreError, StateGrid
 
@@ -193,8 +199,26 @@ def reconstruct(
     return _merged_state(free, occupied, box, 1)  # a closing of 1 cell leaves the grid as it is
 
 
+_ALL = (-1, -1, -1, -1)
+"""A robot's dirty box when its whole map must be rebuilt (a full map arrived, or none was rebuilt yet)."""
+
+
 class CentreMap:
     """The centre's memory of every robot's last map; takes full maps and deltas, gives the merged grid.
+
+    The merged grid is kept between rounds and redone only where the robots' maps changed (issue 13: the
+    centre's work follows what changed, not the map). A delta changes a robot's codes in a box; its free
+    space can then differ only in that box grown by one cell, so its fill is redone there alone, seeded
+    from its free space just outside, and the merge and the closing are redone round that box.
+    :meth:`state_from_scratch` rebuilds everything, the reference the tests hold :meth:`state` to.
+
+    Why a box suffices: a robot's codes are the neighbour codes of its grid, with a seed in each of its
+    free components (what :func:`~mrexplore.preprocessing.sparse_map.sparse_frontier_map` sends). A cell
+    that turns free or stops being free changes its own code or a neighbour's, unless every neighbour
+    changed with it; so a changed cell beyond the box would bring every cell of its side of the box with
+    it, out to the grid's edge. The centre rebuilds a robot whole when that cannot be ruled out: when
+    its free space touched the grid's edge before, when a seed outside the box lies outside its free
+    space, or when the fill in the box steps out of it into a cell that was not free.
 
     Examples
     --------
@@ -217,6 +241,17 @@ class CentreMap:
         self._cells = [np.zeros(0, dtype=np.int64) for _ in range(n_robots)]
         self._round = [_NOT_HEARD] * n_robots
         self._known = [False] * n_robots
+        # Kept between rounds: each robot's rebuilt free space and occupied cells (allocated when first
+        # rebuilt), the boxes their free cells and all their cells lie in, and where its codes changed since.
+        self._free: list[BoolGrid | None] = [None] * n_robots
+        self._occupied: list[BoolGrid | None] = [None] * n_robots
+        self._free_box: list[Box | None] = [None] * n_robots
+        self._extent: list[Box | None] = [None] * n_robots
+        self._dirty: list[Box | None] = [None] * n_robots
+        # Per cell, how many robots hold it free / occupied; the merged grid, closed.
+        self._free_n = np.zeros(shape, dtype=np.uint16)
+        self._occupied_n = np.zeros(shape, dtype=np.uint16)
+        self._closed = np.full(shape, CellState.UNKNOWN, dtype=np.uint8)
 
     def accepts(self, message: SparseFrontierMap) -> bool:
         """Whether :meth:`receive` can take ``message``: a full map always, a delta only on the round the
@@ -244,10 +279,18 @@ class CentreMap:
                 order = np.argsort(changed, kind="stable")
                 changed, codes = changed[order], codes[order]
             self._cells[i] = _updated_cells(self._cells[i], changed.astype(np.int64, copy=False), codes)
+            if len(changed) and self._dirty[i] != _ALL:
+                rows = changed // self.shape[1]
+                cols = changed % self.shape[1]
+                near = grown_slices(
+                    (int(rows[0]), int(rows[-1]) + 1, int(cols.min()), int(cols.max()) + 1), 1, self.shape
+                )
+                self._dirty[i] = _union(self._dirty[i], (near[0].start, near[0].stop, near[1].start, near[1].stop))
         else:
             self._codes[i] = message.code_grid()
             # Sorted and unique, as the delta's merge needs them (the fill reads them in any order).
             self._cells[i] = np.unique(message.cells).astype(np.int64, copy=False)
+            self._dirty[i] = _ALL
         self._seeds[i] = message.seeds
         self._round[i] = message.round
         self._known[i] = True
@@ -255,7 +298,25 @@ class CentreMap:
     def state(self) -> StateGrid:
         """The merged, closed grid the planners run on: free where some robot has free space and none an
         obstacle, occupied where some robot has an obstacle, then closed (paper IV-A: noise removed by
-        closing after reconstruction)."""
+        closing after reconstruction). A copy: the centre's own grid changes with the next round."""
+        changed = [box for i in range(len(self._codes)) if self._known[i] and (box := self._update(i)) is not None]
+        reach = closing_reach(self.closing_size_cells)
+        for box in changed:
+            # The closing reads free cells up to its reach away: redo it within the reach of the change,
+            # from the cells within the reach of that (as the robots do on board).
+            inner = grown_slices(box, reach, self.shape)
+            read = grown_slices((inner[0].start, inner[0].stop, inner[1].start, inner[1].stop), reach, self.shape)
+            raw = _state_of(self._free_n[read] > 0, self._occupied_n[read] > 0)
+            within = (
+                slice(inner[0].start - read[0].start, inner[0].stop - read[0].start),
+                slice(inner[1].start - read[1].start, inner[1].stop - read[1].start),
+            )
+            self._closed[inner] = close_unknown_holes(raw, self.closing_size_cells)[within]
+        return self._closed.copy()
+
+    def state_from_scratch(self) -> StateGrid:
+        """:meth:`state` computed from every robot's whole map, nothing kept: each robot's fill over the
+        box of its message, merged and closed on their boxes. The reference for :meth:`state`."""
         free = np.zeros(self.shape, dtype=bool)
         occupied = np.zeros(self.shape, dtype=bool)
         box: Box | None = None
@@ -263,6 +324,79 @@ class CentreMap:
             if self._known[i]:  # each robot's fill in one shared pair of masks, touching only its cells
                 box = _union(box, _rebuild_into(self._codes[i], self._cells[i], self._seeds[i], free, occupied))
         return _merged_state(free, occupied, box, self.closing_size_cells)
+
+    def _update(self, i: int) -> Box | None:
+        """Bring robot i's kept free space and occupied cells, and the counts, up to its codes and seeds;
+        returns the box where they changed (None: nowhere)."""
+        dirty, free = self._dirty[i], self._free[i]
+        self._dirty[i] = None
+        seeds = self._seeds[i]
+        if free is None or dirty == _ALL or _touches_edge(self._free_box[i], self.shape):
+            return self._rebuild_whole(i)
+        if dirty is None:  # codes unchanged: so is free space, if every seed still lies in it
+            return None if bool(free.ravel()[seeds].all()) else self._rebuild_whole(i)
+        r0, r1, c0, c1 = dirty
+        codes = self._codes[i]
+        rows, cols = np.divmod(seeds, self.shape[1])
+        inside = (rows >= r0) & (rows < r1) & (cols >= c0) & (cols < c1)
+        if not bool(free.ravel()[seeds[~inside]].all()):
+            return self._rebuild_whole(i)
+        sub = np.ascontiguousarray(codes[r0:r1, c0:c1])
+        local = (rows[inside] - r0) * (c1 - c0) + (cols[inside] - c0)
+        filled = np.zeros(sub.shape, dtype=bool)
+        scanline_fill(sub, np.concatenate([local, entry_seeds(codes, free, dirty)]), filled)
+        if fill_leaves_box(codes, free, filled, dirty):
+            return self._rebuild_whole(i)
+        new_free = filled | (sub != 0)
+        new_occupied = occupied_in(codes, dirty)
+        occupied = self._occupied[i]
+        assert occupied is not None  # allocated with free
+        window = slice(r0, r1), slice(c0, c1)
+        _recount(self._free_n[window], free[window], new_free)
+        _recount(self._occupied_n[window], occupied[window], new_occupied)
+        free[window] = new_free
+        occupied[window] = new_occupied
+        grown = mask_box(new_free)
+        if grown is not None:
+            self._free_box[i] = _union(self._free_box[i], (grown[0] + r0, grown[1] + r0, grown[2] + c0, grown[3] + c0))
+        self._extent[i] = _union(self._extent[i], dirty)
+        return dirty
+
+    def _rebuild_whole(self, i: int) -> Box | None:
+        """Robot i's fill over the box of its whole message (the whole grid where free space reaches its
+        side), replacing what was kept; returns the box where its cells changed."""
+        free = np.zeros(self.shape, dtype=bool)
+        occupied = np.zeros(self.shape, dtype=bool)
+        box = _rebuild_into(self._codes[i], self._cells[i], self._seeds[i], free, occupied)
+        changed = _union(self._extent[i], box)
+        if changed is not None:
+            window = slice(changed[0], changed[1]), slice(changed[2], changed[3])
+            old_free, old_occupied = self._free[i], self._occupied[i]
+            if old_free is None or old_occupied is None:
+                self._free_n[window] += free[window]
+                self._occupied_n[window] += occupied[window]
+            else:
+                _recount(self._free_n[window], old_free[window], free[window])
+                _recount(self._occupied_n[window], old_occupied[window], occupied[window])
+        self._free[i], self._occupied[i] = free, occupied
+        self._free_box[i] = None if box is None else mask_box(free[box[0] : box[1], box[2] : box[3]])
+        if self._free_box[i] is not None and box is not None:
+            b = self._free_box[i]
+            assert b is not None
+            self._free_box[i] = (b[0] + box[0], b[1] + box[0], b[2] + box[2], b[3] + box[2])
+        self._extent[i] = box
+        return changed
+
+
+def _recount(counts: NDArray[np.uint16], was: BoolGrid, now: BoolGrid) -> None:
+    """Move per-cell robot counts from one robot's old mask to its new one, in place."""
+    counts += now & ~was
+    counts -= was & ~now
+
+
+def _touches_edge(box: Box | None, shape: tuple[int, int]) -> bool:
+    """Whether a box reaches the grid's edge (free space there may change beyond any box: rebuild whole)."""
+    return box is not None and (box[0] == 0 or box[2] == 0 or box[1] == shape[0] or box[3] == shape[1])
 
 
 def free_iou(a: BoolGrid, b: BoolGrid) -> float:

@@ -8,7 +8,16 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-__all__ = ["scanline_fill", "pick_seeds", "coded_cells", "neighbour_codes_kernel", "mark_coded_cells"]
+__all__ = [
+    "scanline_fill",
+    "pick_seeds",
+    "coded_cells",
+    "neighbour_codes_kernel",
+    "mark_coded_cells",
+    "entry_seeds",
+    "fill_leaves_box",
+    "occupied_in",
+]
 
 _FREE, _OCCUPIED, _UNKNOWN = 0, 1, 2  # CellState values
 _DR = (-1, 1, 0, 0)
@@ -146,3 +155,71 @@ def mark_coded_cells(
             # A code from the wire may flag a side beyond the grid: numba does not check bounds, so we do.
             if (code >> (4 + d)) & 1 and 0 <= rr < H and 0 <= cc < W:
                 occupied[rr, cc] = True
+
+
+@nb.njit(cache=True, nogil=True)
+def entry_seeds(
+    codes: np.ndarray, free: np.ndarray, box: tuple[int, int, int, int]
+) -> np.ndarray:  # pragma: no cover - numba
+    """Cells of ``box`` (row-major indices in the box) that a free cell just outside it steps into: where
+    the robot's free space outside the box enters it. A move out of a cell is allowed towards each side its
+    neighbour code does not flag, as in :func:`scanline_fill`."""
+    H, W = codes.shape
+    r0, r1, c0, c1 = box
+    w = c1 - c0
+    out = []
+    for c in range(c0, c1):
+        if r0 > 0 and free[r0 - 1, c] and (codes[r0 - 1, c] & _DOWN_MASK) == 0:
+            out.append(c - c0)
+        if r1 < H and free[r1, c] and (codes[r1, c] & _UP_MASK) == 0:
+            out.append((r1 - 1 - r0) * w + c - c0)
+    for r in range(r0, r1):
+        if c0 > 0 and free[r, c0 - 1] and (codes[r, c0 - 1] & _RIGHT_MASK) == 0:
+            out.append((r - r0) * w)
+        if c1 < W and free[r, c1] and (codes[r, c1] & _LEFT_MASK) == 0:
+            out.append((r - r0) * w + w - 1)
+    seeds = np.empty(len(out), dtype=np.int64)
+    for k in range(len(out)):
+        seeds[k] = out[k]
+    return seeds
+
+
+@nb.njit(cache=True, nogil=True)
+def fill_leaves_box(
+    codes: np.ndarray, free: np.ndarray, filled: np.ndarray, box: tuple[int, int, int, int]
+) -> bool:  # pragma: no cover
+    """Whether a cell the fill in ``box`` reached steps out of the box into a cell outside it that was not
+    free space: free space changed beyond the box, and only a fill of the whole grid can say how."""
+    H, W = codes.shape
+    r0, r1, c0, c1 = box
+    for c in range(c0, c1):
+        if r0 > 0 and filled[0, c - c0] and (codes[r0, c] & _UP_MASK) == 0 and not free[r0 - 1, c]:
+            return True
+        if r1 < H and filled[r1 - 1 - r0, c - c0] and (codes[r1 - 1, c] & _DOWN_MASK) == 0 and not free[r1, c]:
+            return True
+    for r in range(r0, r1):
+        if c0 > 0 and filled[r - r0, 0] and (codes[r, c0] & _LEFT_MASK) == 0 and not free[r, c0 - 1]:
+            return True
+        if c1 < W and filled[r - r0, c1 - 1 - c0] and (codes[r, c1 - 1] & _RIGHT_MASK) == 0 and not free[r, c1]:
+            return True
+    return False
+
+
+@nb.njit(cache=True, nogil=True)
+def occupied_in(codes: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:  # pragma: no cover - numba
+    """``(h, w) bool`` the cells of ``box`` that a code (of a cell in the box or next to it) calls
+    occupied: what :func:`mark_coded_cells` marks there."""
+    H, W = codes.shape
+    r0, r1, c0, c1 = box
+    out = np.zeros((r1 - r0, c1 - c0), dtype=np.bool_)
+    for r in range(max(r0 - 1, 0), min(r1 + 1, H)):
+        for c in range(max(c0 - 1, 0), min(c1 + 1, W)):
+            code = codes[r, c]
+            if code < 16:
+                continue  # no side flagged occupied
+            for d in range(4):
+                rr = r + _DR[d]
+                cc = c + _DC[d]
+                if (code >> (4 + d)) & 1 and r0 <= rr < r1 and c0 <= cc < c1:
+                    out[rr - r0, cc - c0] = True
+    return out
