@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
@@ -13,7 +14,10 @@ from mrexplore.types import BoolGrid, CellState, StateGrid
 __all__ = ["Frontiers", "close_unknown_holes", "closing_reach", "detect_frontiers", "FOUR_NEIGHBOUR_KERNEL"]
 
 FOUR_NEIGHBOUR_KERNEL = np.array([[0, 1, 0], [1, 0, 1], [0, 1, 0]], dtype=np.uint8)
-"""The paper's neighbourhood: g(i-1,j), g(i+1,j), g(i,j-1), g(i,j+1)."""
+"""The paper's neighbourhood: g(i-1,j), g(i+1,j), g(i,j-1), g(i,j+1) (the four :func:`detect_frontiers`
+reads)."""
+_FREE, _UNKNOWN, _OCCUPIED = int(CellState.FREE), int(CellState.UNKNOWN), int(CellState.OCCUPIED)
+assert (_FREE, _OCCUPIED, _UNKNOWN) == (0, 1, 2)  # the bits _frontier_masks reads
 
 
 @dataclass(frozen=True)
@@ -102,7 +106,9 @@ def detect_frontiers(state: StateGrid) -> Frontiers:
 
     The grid is split into one-hot channels (free, unknown, occupied); a channel convolved with the
     kernel counts, per cell, the 4-neighbours in that state; frontiers are where that count is positive
-    inside the free channel. Cells beyond the grid count as no state.
+    inside the free channel. Cells beyond the grid count as no state. Both channels are convolved in one
+    compiled pass over the free cells' box (the tests hold it to ``scipy.ndimage.convolve``): the numpy
+    sums of shifted channels it replaced took 8-11 ms a decision late on a 4.9 M-cell KTH floor.
 
     Examples
     --------
@@ -114,28 +120,53 @@ def detect_frontiers(state: StateGrid) -> Frontiers:
     >>> f.un_rc.tolist(), f.occ_rc.tolist()
     ([[1, 1], [2, 2]], [[1, 0], [1, 1]])
     """
-    free = state == CellState.FREE
     un_mask = np.zeros(state.shape, dtype=bool)
     occ_mask = np.zeros(state.shape, dtype=bool)
-    box = _known_box(free, 1)  # frontiers are free cells: only the free box (+1 for its neighbours) matters
-    if box is None:
-        return Frontiers(un_mask=un_mask, occ_mask=occ_mask)
-    sub, sub_free = state[box], free[box]
-    for s, out in ((CellState.UNKNOWN, un_mask), (CellState.OCCUPIED, occ_mask)):
-        out[box] = sub_free & (_convolve_kernel(sub == s, FOUR_NEIGHBOUR_KERNEL) > 0)
+    box = mask_box(state == CellState.FREE)
+    if box is not None:
+        _frontier_masks(state, box, un_mask, occ_mask)
     return Frontiers(un_mask=un_mask, occ_mask=occ_mask)
 
 
-def _convolve_kernel(channel: BoolGrid, kernel: NDArray[np.uint8]) -> NDArray[np.uint8]:
-    """``channel`` convolved with a 3 x 3 0/1 kernel, zero beyond the grid: a sum of shifted copies
-    (as ``scipy.ndimage.convolve(mode="constant")``, several times faster for so small a kernel)."""
-    ch = channel.astype(np.uint8)
-    out = np.zeros(ch.shape, dtype=np.uint8)
-    H, W = ch.shape
-    for dr in (-1, 0, 1):
-        for dc in (-1, 0, 1):
-            if kernel[1 + dr, 1 + dc]:  # out[r] += ch[r - dr]: the kernel flipped, as a convolution
-                out[max(dr, 0) : H + min(dr, 0), max(dc, 0) : W + min(dc, 0)] += ch[
-                    max(-dr, 0) : H + min(-dr, 0), max(-dc, 0) : W + min(-dc, 0)
-                ]
-    return out
+@nb.njit(cache=True, nogil=True)
+def _frontier_masks(
+    state: np.ndarray, box: tuple[int, int, int, int], un_mask: np.ndarray, occ_mask: np.ndarray
+) -> None:  # pragma: no cover - numba
+    """Mark in ``un_mask`` and ``occ_mask`` (all False on entry) the free cells of ``box`` with an unknown /
+    occupied 4-neighbour: the two channels' counts and their test for > 0 at once. The states' bits do
+    it (free 0, occupied 1, unknown 2: the OR of the four neighbours holds bit 1 where one is unknown,
+    bit 0 where one is occupied), and only frontier cells are written."""
+    H, W = state.shape
+    r0, r1, c0, c1 = box
+    for r in range(max(r0, 1), min(r1, H - 1)):
+        up, me, down = state[r - 1], state[r], state[r + 1]
+        for c in range(max(c0, 1), min(c1, W - 1)):
+            n = up[c] | down[c] | me[c - 1] | me[c + 1]
+            if n != 0 and me[c] == _FREE:
+                if n & _UNKNOWN:
+                    un_mask[r, c] = True
+                if n & _OCCUPIED:
+                    occ_mask[r, c] = True
+    for r in (0, H - 1):  # the grid's own edges: a neighbour beyond the grid counts as no state
+        if r0 <= r < r1:
+            for c in range(c0, c1):
+                _mark_edge_cell(state, r, c, un_mask, occ_mask)
+    for c in (0, W - 1):
+        if c0 <= c < c1:
+            for r in range(r0, r1):
+                _mark_edge_cell(state, r, c, un_mask, occ_mask)
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _mark_edge_cell(
+    state: np.ndarray, r: int, c: int, un_mask: np.ndarray, occ_mask: np.ndarray
+) -> None:  # pragma: no cover - numba
+    H, W = state.shape
+    if state[r, c] != _FREE:
+        return
+    n = 0
+    for rr, cc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
+        if 0 <= rr < H and 0 <= cc < W:
+            n |= state[rr, cc]
+    un_mask[r, c] = (n & _UNKNOWN) != 0
+    occ_mask[r, c] = (n & _OCCUPIED) != 0
