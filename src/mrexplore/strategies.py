@@ -9,7 +9,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components
 
 from mrexplore.boxes import Box, grown_slices, mask_box
 from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig, SimConfig
@@ -448,20 +449,27 @@ def _denoised_un(frontiers: Frontiers, blacklist: BoolGrid | None, min_size: int
     ``min_size`` cells (1: none): the noise rule of every strategy's candidates (the Mean-Shift ones'
     under ``preprocess.drop_specks``), so that every strategy ends on the same frontiers.
 
-    Sparse: the pieces are labelled in the frontier cells' bounding box only; full-grid passes (copy,
-    blacklist, labelling, indexing) cost 35 ms a decision on a KTH floor at 0.05 m.
+    Sparse: the pieces are the connected components of a graph on the frontier cells alone, each joined
+    to its 8-neighbours found by binary search in the cells' sorted indices. Full-grid passes (copy,
+    blacklist, labelling, indexing) cost 35 ms a decision on a KTH floor at 0.05 m, and labelling the
+    cells' bounding box, which late in a mission is the whole floor, still 11 ms.
     """
     cells = frontiers.un_rc.astype(np.int64)
     if blacklist is not None and len(cells):
         cells = cells[~blacklist[cells[:, 0], cells[:, 1]]]
     if len(cells) == 0 or min_size <= 1:
         return cells
-    lo = cells.min(axis=0)
-    local = cells - lo
-    sub = np.zeros(tuple(local.max(axis=0) + 1), dtype=bool)
-    sub[local[:, 0], local[:, 1]] = True
-    labels, _ = ndimage.label(sub, structure=np.ones((3, 3)))
-    piece = labels[local[:, 0], local[:, 1]]
+    width = int(cells[:, 1].max()) + 3  # a column either side: no neighbour wraps into the next row
+    flat = cells[:, 0] * width + cells[:, 1] + 1  # increasing: the cells are row-major
+    edges = []
+    for step in (1, width - 1, width, width + 1):  # right and the three below: each pair once
+        j = np.searchsorted(flat, flat + step)
+        hit = j < len(flat)
+        hit[hit] = flat[j[hit]] == flat[hit] + step
+        edges.append(np.stack([np.flatnonzero(hit), j[hit]]))
+    pairs = np.concatenate(edges, axis=1)
+    graph = csr_matrix((np.ones(pairs.shape[1], np.int8), (pairs[0], pairs[1])), shape=(len(flat), len(flat)))
+    _, piece = connected_components(graph, directed=False)
     return cells[np.bincount(piece)[piece] >= min_size]
 
 
