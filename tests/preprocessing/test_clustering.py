@@ -16,6 +16,7 @@ from mrexplore.preprocessing.clustering import (
     _RowIndex,
     adaptive_bandwidth,
     bin_seeds,
+    bounded_bandwidth,
     cluster_frontiers,
     linear_percentile,
     mean_shift,
@@ -63,6 +64,24 @@ def test_a_bandwidth_bound_keeps_pairs_apart_that_the_percentile_rule_joins() ->
     assert bounded.sizes.tolist() == [2, 2, 2, 2]
     # A bound above the rule's bandwidth changes nothing.
     assert cluster_frontiers(pts, PreprocessConfig(), max_bandwidth_cells=5.0).sizes.tolist() == [3, 2, 3]
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.tuples(st.integers(0, 30), st.integers(0, 30)), min_size=2, max_size=60),
+    st.sampled_from([5.0, 15.0, 50.0, 100.0]),
+    st.integers(2, 40),
+    st.one_of(st.none(), st.integers(1, 40).map(float), st.floats(0.5, 45.0)),
+)
+def test_the_bounded_bandwidth_is_the_percentile_capped_by_the_bound(
+    cells_: list[tuple[int, int]], percentile: float, max_sample: int, bound: float | None
+) -> None:
+    # Integer cells and whole-number bounds put pair distances exactly at the bound (5.0 for a 3-4-5 pair).
+    pts = np.array(cells_, dtype=np.float64)
+    expected = adaptive_bandwidth(pts, percentile, max_sample)
+    if bound is not None:
+        expected = min(expected, bound)
+    assert bounded_bandwidth(pts, percentile, max_sample, bound) == expected
 
 
 @pytest.mark.parametrize(("bound_m", "resolution_m", "clusters"), [(1.0, 0.5, 4), (None, 0.5, 3), (1.0, 0.1, 3)])

