@@ -17,7 +17,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import Box, grown_slices, mask_box
+from mrexplore.boxes import Box, box_union, grown_slices, mask_box
 from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
 from mrexplore.preprocessing.scanline_fill import (
     entry_seeds,
@@ -301,7 +301,7 @@ class CentreMap:
         closing after reconstruction). A copy: the centre's own grid changes with the next round."""
         changed = [box for i in range(len(self._codes)) if self._known[i] and (box := self._update(i)) is not None]
         reach = closing_reach(self.closing_size_cells)
-        for box in changed:
+        for box in _fewer_boxes(changed, reach):
             # The closing reads free cells up to its reach away: redo it within the reach of the change,
             # from the cells within the reach of that (as the robots do on board).
             inner = grown_slices(box, reach, self.shape)
@@ -356,9 +356,7 @@ class CentreMap:
         _recount(self._occupied_n[window], occupied[window], new_occupied)
         free[window] = new_free
         occupied[window] = new_occupied
-        grown = mask_box(new_free)
-        if grown is not None:
-            self._free_box[i] = _union(self._free_box[i], (grown[0] + r0, grown[1] + r0, grown[2] + c0, grown[3] + c0))
+        self._free_box[i] = _union(self._free_box[i], _mask_box_in(free, dirty))
         self._extent[i] = _union(self._extent[i], dirty)
         return dirty
 
@@ -379,13 +377,31 @@ class CentreMap:
                 _recount(self._free_n[window], old_free[window], free[window])
                 _recount(self._occupied_n[window], old_occupied[window], occupied[window])
         self._free[i], self._occupied[i] = free, occupied
-        self._free_box[i] = None if box is None else mask_box(free[box[0] : box[1], box[2] : box[3]])
-        if self._free_box[i] is not None and box is not None:
-            b = self._free_box[i]
-            assert b is not None
-            self._free_box[i] = (b[0] + box[0], b[1] + box[0], b[2] + box[2], b[3] + box[2])
+        self._free_box[i] = None if box is None else _mask_box_in(free, box)
         self._extent[i] = box
         return changed
+
+
+def _fewer_boxes(boxes: list[Box], margin: int) -> list[Box]:
+    """``boxes``, or the one box holding them all where that is smaller than the boxes grown by ``margin``
+    together: on a small map the robots' boxes overlap, and closing each would close cells several times."""
+    if len(boxes) < 2:
+        return boxes
+    whole = boxes[0]
+    for b in boxes[1:]:
+        whole = box_union(whole, b)
+
+    def area(b: Box) -> int:
+        return (b[1] - b[0] + 2 * margin) * (b[3] - b[2] + 2 * margin)
+
+    return [whole] if area(whole) <= sum(area(b) for b in boxes) else boxes
+
+
+def _mask_box_in(mask: BoolGrid, box: Box) -> Box | None:
+    """The bounding box of the True cells of ``mask`` inside ``box``, in the grid's coordinates."""
+    r0, r1, c0, c1 = box
+    found = mask_box(mask[r0:r1, c0:c1])
+    return None if found is None else (found[0] + r0, found[1] + r0, found[2] + c0, found[3] + c0)
 
 
 def _recount(counts: NDArray[np.uint16], was: BoolGrid, now: BoolGrid) -> None:
