@@ -413,7 +413,7 @@ class Mission:
     def _round(self) -> tuple[float, tuple[object, ...]]:
         """The centre's round (robots send, the centre rebuilds): the start time and the arguments every
         strategy decides on (grid, cells of the robots it assigns to, resolution, blacklist, their current
-        routes, generator)."""
+        routes, generator, the grid's frontiers as the centre keeps them)."""
         t = time.perf_counter()
         sim, link = self.sim, self.link
         while self._restarts and self._restarts[0] <= sim.steps:
@@ -431,6 +431,7 @@ class Mission:
             self.blacklist,
             [current[i] for i in self._active],
             self.rng,
+            link.centre.frontiers(),
         )
 
     def _centre_ms(self, t: float) -> float:

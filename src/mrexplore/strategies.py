@@ -322,6 +322,7 @@ class ExplorationPipeline:
         blacklist: BoolGrid | None = None,
         current: Sequence[NDArray[np.int32]] | None = None,
         rng: np.random.Generator | None = None,
+        frontiers: Frontiers | None = None,
     ) -> PosedDecision:
         """Layer 1 and the distances: the :class:`PosedDecision` a global planner answers (or the end).
 
@@ -330,9 +331,11 @@ class ExplorationPipeline:
         current route (its goal first; empty for none): a goal still on a frontier makes its cluster
         cheaper for that robot by ``commitment``, and a robot assigned that cluster again keeps its
         route. Without it, Mean-Shift's snapped centres of large clusters jump between far pieces from
-        one decision to the next and robots turn back and forth.
+        one decision to the next and robots turn back and forth. ``frontiers``: those of ``state`` where the
+        caller has them (the centre keeps them where the grid changed; None: detected here).
         """
-        frontiers = detect_frontiers(state)
+        if frontiers is None:
+            frontiers = detect_frontiers(state)
         planning = self.planning_state(state)
         passable = planning == CellState.FREE
         computed: list[list[RobotField]] = []
@@ -434,11 +437,12 @@ class ExplorationPipeline:
         blacklist: BoolGrid | None = None,
         current: Sequence[NDArray[np.int32]] | None = None,
         rng: np.random.Generator | None = None,
+        frontiers: Frontiers | None = None,
     ) -> Decision:
         """Run layers 1-3 on the centre's grid and give every robot a goal, a route and a path
         (:meth:`pose`, the global planner's answer, :meth:`finish`); ``rng`` reaches the planner in the
-        problem (a seeded generator for stochastic planners)."""
-        posed = self.pose(state, robots_rc, resolution_m, blacklist, current, rng)
+        problem (a seeded generator for stochastic planners); ``frontiers`` as in :meth:`pose`."""
+        posed = self.pose(state, robots_rc, resolution_m, blacklist, current, rng, frontiers)
         if posed.problem is None:
             return posed.final  # type: ignore[return-value]
         return self.finish(posed, self.assign(posed))

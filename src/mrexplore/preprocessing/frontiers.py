@@ -11,7 +11,14 @@ from numpy.typing import NDArray
 from mrexplore.boxes import cells_of, grown_slices, mask_box
 from mrexplore.types import BoolGrid, CellState, StateGrid
 
-__all__ = ["Frontiers", "close_unknown_holes", "closing_reach", "detect_frontiers", "FOUR_NEIGHBOUR_KERNEL"]
+__all__ = [
+    "Frontiers",
+    "close_unknown_holes",
+    "closing_reach",
+    "detect_frontiers",
+    "redetect_frontiers",
+    "FOUR_NEIGHBOUR_KERNEL",
+]
 
 FOUR_NEIGHBOUR_KERNEL = np.array([[0, 1, 0], [1, 0, 1], [0, 1, 0]], dtype=np.uint8)
 """The paper's neighbourhood: g(i-1,j), g(i+1,j), g(i,j-1), g(i,j+1) (the four :func:`detect_frontiers`
@@ -126,6 +133,29 @@ def detect_frontiers(state: StateGrid) -> Frontiers:
     if box is not None:
         _frontier_masks(state, box, un_mask, occ_mask)
     return Frontiers(un_mask=un_mask, occ_mask=occ_mask)
+
+
+def redetect_frontiers(state: StateGrid, box: tuple[int, int, int, int], un_mask: BoolGrid, occ_mask: BoolGrid) -> None:
+    """Bring ``un_mask`` and ``occ_mask`` (:func:`detect_frontiers` of an earlier ``state``) up to date in
+    place where ``state`` changed, ``box``: a cell's labels read it and its 4-neighbours, so they are redone
+    in the box grown by one cell, and nowhere else can they differ.
+
+    Examples
+    --------
+    >>> F, O, U = CellState.FREE, CellState.OCCUPIED, CellState.UNKNOWN
+    >>> g = np.full((3, 5), F, np.uint8); g[:, 4] = U
+    >>> f = detect_frontiers(g)
+    >>> g[:, 4] = F; g[1, 0] = O  # the right column seen free, an obstacle on the left
+    >>> redetect_frontiers(g, (0, 3, 4, 5), f.un_mask, f.occ_mask)  # the unknown column only
+    >>> redetect_frontiers(g, (1, 2, 0, 1), f.un_mask, f.occ_mask)  # the obstacle
+    >>> f.un_rc.tolist(), f.occ_rc.tolist()
+    ([], [[0, 0], [1, 1], [2, 0]])
+    """
+    H, W = state.shape
+    r0, r1, c0, c1 = max(box[0] - 1, 0), min(box[1] + 1, H), max(box[2] - 1, 0), min(box[3] + 1, W)
+    un_mask[r0:r1, c0:c1] = False
+    occ_mask[r0:r1, c0:c1] = False
+    _frontier_masks(state, (r0, r1, c0, c1), un_mask, occ_mask)
 
 
 @nb.njit(cache=True, nogil=True)

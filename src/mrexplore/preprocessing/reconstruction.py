@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrexplore.boxes import Box, box_union, grown_slices, mask_box
-from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
+from mrexplore.preprocessing.frontiers import Frontiers, close_unknown_holes, closing_reach, redetect_frontiers
 from mrexplore.preprocessing.scanline_fill import (
     entry_seeds,
     fill_leaves_box,
@@ -252,6 +252,8 @@ class CentreMap:
         self._free_n = np.zeros(shape, dtype=np.uint16)
         self._occupied_n = np.zeros(shape, dtype=np.uint16)
         self._closed = np.full(shape, CellState.UNKNOWN, dtype=np.uint8)
+        self._un = np.zeros(shape, dtype=bool)  # the merged grid's F_un and F_occ
+        self._occ = np.zeros(shape, dtype=bool)
 
     def accepts(self, message: SparseFrontierMap) -> bool:
         """Whether :meth:`receive` can take ``message``: a full map always, a delta only on the round the
@@ -298,7 +300,8 @@ class CentreMap:
     def state(self) -> StateGrid:
         """The merged, closed grid the planners run on: free where some robot has free space and none an
         obstacle, occupied where some robot has an obstacle, then closed (paper IV-A: noise removed by
-        closing after reconstruction). A copy: the centre's own grid changes with the next round."""
+        closing after reconstruction). A copy: the centre's own grid changes with the next round; its
+        frontiers come from :meth:`frontiers`."""
         changed = [box for i in range(len(self._codes)) if self._known[i] and (box := self._update(i)) is not None]
         reach = closing_reach(self.closing_size_cells)
         for box in _fewer_boxes(changed, reach):
@@ -312,7 +315,15 @@ class CentreMap:
                 slice(inner[1].start - read[1].start, inner[1].stop - read[1].start),
             )
             self._closed[inner] = close_unknown_holes(raw, self.closing_size_cells)[within]
+            redetect_frontiers(
+                self._closed, (inner[0].start, inner[0].stop, inner[1].start, inner[1].stop), self._un, self._occ
+            )
         return self._closed.copy()
+
+    def frontiers(self) -> Frontiers:
+        """The frontiers of the grid :meth:`state` last gave (``detect_frontiers`` of it), kept like the grid
+        and redone only where it changed: a whole-grid detection was 8-15 ms a decision late on a KTH floor."""
+        return Frontiers(un_mask=self._un.copy(), occ_mask=self._occ.copy())
 
     def state_from_scratch(self) -> StateGrid:
         """:meth:`state` computed from every robot's whole map, nothing kept: each robot's fill over the
