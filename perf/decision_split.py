@@ -6,12 +6,14 @@ wrapped around the decision's parts for the first steps of one mission.
     python perf/decision_split.py --map ../shared/maps/kth_floorplans/50010535_PLAN1.yaml --strategy hier \
         --from-coverage 0.5 --decisions 20
 
-Parts: the centre's rebuild of the robots' maps (``rebuild``, one call per robot) and closing, frontier
-detection, Mean-Shift, the robots' distance fields, the global assignment, layer 3 (``route``, one call
-per robot; for ``hier`` its sub-clustering, candidate distances and order search) and the paths read off
-the fields; on a large floor the pooled coarse grid and the near/far fields. Prints the decision's median
-and each part's milliseconds per decision. Parts nest (``route`` holds the three after it, ``state`` the
-rebuilds), so they do not add up to the decision. With ``--from-coverage`` the mission first runs untimed
+Parts: the centre's merged state (``state``: each robot's map brought up to date, ``update``, where
+its delta fell, or ``rebuild`` whole; the closing and the frontiers redone round what changed; parts an
+older checkout lacks are left out), frontier detection where the strategy does it, Mean-Shift, the
+robots' distance fields, the global assignment, layer 3 (``route``, one call per robot; for ``hier`` its
+sub-clustering, candidate distances and order search) and the paths read off the fields; on a large floor
+the pooled coarse grid and the near/far fields. Prints the decision's median and each part's
+milliseconds per decision. Parts nest (indented under the part that holds them), so they do not add up
+to the decision. With ``--from-coverage`` the mission first runs untimed
 until the team's coverage reaches it, then the next ``--decisions`` decisions are timed (the mission's own
 replanning, as :mod:`profile_decision` does): late decisions on a whole floor.
 """
@@ -38,8 +40,10 @@ from mrexplore.mission import Mission
 
 PARTS: tuple[tuple[Any, str, str], ...] = (
     (reconstruction.CentreMap, "state", "state"),
-    (reconstruction, "_rebuild_into", "  rebuild (per robot)"),
-    (reconstruction, "close_unknown_holes", "closing"),
+    (reconstruction.CentreMap, "_update", "  update (per robot)"),
+    (reconstruction, "_rebuild_into", "  rebuild (whole robot)"),
+    (reconstruction, "close_unknown_holes", "  closing"),
+    (reconstruction, "redetect_frontiers", "  frontiers"),
     (strategies, "detect_frontiers", "frontiers"),
     (strategies, "cluster_frontiers", "mean-shift"),
     (strategies, "distance_fields", "distance fields"),
