@@ -6,12 +6,13 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from pytest import MonkeyPatch
 
 from mrexplore.config import SensorConfig
 from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
 from mrexplore.preprocessing.onboard import OnBoardGrid
 from mrexplore.preprocessing.sparse_codec import decode
-from mrexplore.preprocessing.sparse_map import neighbour_codes
+from mrexplore.preprocessing.sparse_map import component_seeds, neighbour_codes
 from mrexplore.preprocessing.transmission import RobotSender
 from mrexplore.sim.belief import Belief, classify
 from mrexplore.types import CellState
@@ -150,3 +151,61 @@ def test_baseline_grid_bytes_are_the_known_box_as_ros_values(h: int, w: int, see
         ros = np.array([0, 100, -1], np.int8)[window[box[0] : box[1], box[2] : box[3]]].tobytes()
         expected = (HEADER.size + len(ros), HEADER.size + len(zlib.compress(ros, 6)))
     assert occupancy_grid_bytes(window) == expected
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.integers(0, 10**6), st.sampled_from([1, 3]), st.floats(0.05, 0.4))
+def test_seeds_kept_where_free_space_stays_one_piece_equal_the_whole_fill(
+    seed: int, size: int, wall_share: float
+) -> None:
+    """A robot scanning a random map round by round, standing on a free cell most rounds: the seeds it
+    finds from what changed since its last seeds equal the whole fill's, every round."""
+    rng = np.random.default_rng(seed)
+    shape = (int(rng.integers(6, 30)), int(rng.integers(6, 30)))
+    truth = rng.random(shape) < wall_share
+    belief = Belief.empty(shape)
+    grid = OnBoardGrid(shape, size, SENSOR)
+    window = (slice(0, shape[0]), slice(0, shape[1]))
+    for _ in range(12):
+        for _ in range(int(rng.integers(0, 3))):
+            _scan(belief, truth, rng)
+        grid.update(belief)
+        free = np.argwhere(grid.closed == CellState.FREE)
+        if len(free) and rng.random() < 0.9:
+            pos = tuple(int(v) for v in free[rng.integers(len(free))])
+        else:
+            pos = (int(rng.integers(0, shape[0])), int(rng.integers(0, shape[1])))
+        expected = component_seeds(grid.closed, grid.codes, pos, grid.n_free)
+        assert grid.seeds(pos, window).tolist() == expected.tolist()
+
+
+def test_a_room_seen_through_a_door_keeps_one_seed_and_a_shut_door_splits_them(monkeypatch: MonkeyPatch) -> None:
+    # Walls everywhere but two 3 x 3 rooms and the door between them (2, 4). The robot sees its room and
+    # the door, then the other room: its free space grows as one piece, so its seed stays its cell without
+    # a whole fill. Then the door is seen shut: a free cell is lost, the whole fill runs, one seed a room.
+    import mrexplore.preprocessing.onboard as onboard
+
+    fills: list[int] = []
+    whole = onboard.pick_seeds
+    monkeypatch.setattr(onboard, "pick_seeds", lambda *a: fills.append(1) or whole(*a))
+    wall = np.ones((5, 9), bool)
+    wall[1:4, 1:4] = wall[1:4, 5:8] = wall[2, 4] = False
+    belief = Belief.empty(wall.shape)
+    belief.log_odds[:] = np.where(wall, 2.0, -2.0).astype(np.float32)
+
+    def see(r0: int, r1: int, c0: int, c1: int) -> None:
+        belief.observed[r0:r1, c0:c1] = True
+        belief.note_window((r0, r1, c0, c1))
+        grid.update(belief)
+
+    grid = OnBoardGrid(wall.shape, 1, SENSOR)
+    window = (slice(0, 5), slice(0, 9))
+    see(0, 5, 0, 5)  # the robot's room and the door
+    assert grid.seeds((2, 2), window).tolist() == [2 * 9 + 2] and len(fills) == 1
+    see(0, 5, 5, 9)  # the other room, through the door
+    assert grid.seeds((2, 2), window).tolist() == [2 * 9 + 2] and len(fills) == 1
+    belief.log_odds[2, 4] = 2.0  # the door seen shut
+    see(2, 3, 4, 5)
+    expected = component_seeds(grid.closed, grid.codes, (2, 2), grid.n_free).tolist()
+    assert expected == [2 * 9 + 2, 2 * 9 + 6]  # the other room's first interior cell
+    assert grid.seeds((2, 2), window).tolist() == expected and len(fills) == 2

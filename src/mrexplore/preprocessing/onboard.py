@@ -18,9 +18,10 @@ from numpy.typing import NDArray
 from mrexplore.boxes import Box, box_union, grown_slices
 from mrexplore.config import SensorConfig
 from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
+from mrexplore.preprocessing.scanline_fill import joined_in_box, pick_seeds
 from mrexplore.preprocessing.sparse_map import neighbour_codes
 from mrexplore.sim.belief import Belief, classify
-from mrexplore.types import CellState, StateGrid
+from mrexplore.types import CellState, GridRC, StateGrid
 
 __all__ = ["OnBoardGrid"]
 
@@ -59,6 +60,11 @@ class OnBoardGrid:
         this moves)."""
         self._belief: Belief | None = None
         self._revision = 0
+        # Since the last seeds: was free space one component holding the robot, where did closed change,
+        # and did a free cell stop being free (see :meth:`seeds`).
+        self._one_piece = False
+        self._seed_box: Box | None = None
+        self._lost_free = False
 
     def update(self, belief: Belief, free_count: NDArray[np.uint16] | None = None) -> Box | None:
         """Bring the grids in line with ``belief``; returns the box where :attr:`closed` and :attr:`codes`
@@ -92,13 +98,43 @@ class OnBoardGrid:
         read = _slices(_grown(closed_box, reach, shape))
         closed = close_unknown_holes(self.state[read], self.closing_size_cells)[_within(closed_box, read)]
         target = self.closed[_slices(closed_box)]
-        self.n_free += int(np.count_nonzero(closed == CellState.FREE)) - int(np.count_nonzero(target == CellState.FREE))
+        was_free, now_free = target == CellState.FREE, closed == CellState.FREE
+        self.n_free += int(np.count_nonzero(now_free)) - int(np.count_nonzero(was_free))
+        self._lost_free = self._lost_free or bool(np.any(was_free & ~now_free))
+        self._seed_box = box_union(self._seed_box, closed_box)
         target[...] = closed
         coded_box = _grown(closed_box, 1, shape)
         read = _slices(_grown(coded_box, 1, shape))
         self.codes[_slices(coded_box)] = neighbour_codes(self.closed[read])[_within(coded_box, read)]
         self.cells = _spliced(self.cells, self.codes, coded_box)
         return coded_box
+
+    def seeds(self, position_rc: GridRC, window: tuple[slice, slice]) -> NDArray[np.int64]:
+        """:func:`~mrexplore.preprocessing.sparse_map.component_seeds` of :attr:`closed` cut to ``window``
+        (window indices, sorted), the robot at ``position_rc`` (map cell).
+
+        The robot's fill over everything it has seen was the one part of its work that grew with the map.
+        Where its free space was one component holding it at the last seeds, no free cell has been lost
+        since and the robot stands on free space, its free space is still one component (so the seed is
+        its cell) exactly when the cells that changed join it inside their box
+        (:func:`~mrexplore.preprocessing.scanline_fill.joined_in_box`): every old free cell is still free,
+        and a new one is joined to the old ones by a path whose last stretch, from the last free cell
+        outside the box, lies inside it. Otherwise the whole fill, as before."""
+        r, c = int(position_rc[0]), int(position_rc[1])
+        r0, c0 = window[0].start, window[1].start
+        w = window[1].stop - c0
+        H, W = self.closed.shape
+        here = r0 <= r < window[0].stop and c0 <= c < window[1].stop and 0 <= r < H and 0 <= c < W
+        on_free = here and self.closed[r, c] == CellState.FREE
+        box, lost = self._seed_box, self._lost_free
+        self._seed_box, self._lost_free = None, False
+        if self._one_piece and on_free and not lost and (box is None or joined_in_box(self.closed, box)):
+            return np.array([(r - r0) * w + (c - c0)], dtype=np.int64)
+        reached = np.zeros(1, dtype=np.int64)
+        position = (r - r0) * w + (c - c0) if here else -1
+        found = pick_seeds(self.codes[window], self.closed[window], position, self.n_free, reached)
+        self._one_piece = on_free and int(reached[0]) == self.n_free
+        return np.sort(found)
 
 
 def _grown(box: Box, margin: int, shape: tuple[int, int]) -> Box:

@@ -17,6 +17,7 @@ __all__ = [
     "entry_seeds",
     "fill_leaves_box",
     "occupied_in",
+    "joined_in_box",
 ]
 
 _FREE, _OCCUPIED, _UNKNOWN = 0, 1, 2  # CellState values
@@ -67,18 +68,23 @@ def scanline_fill(codes: np.ndarray, seeds: np.ndarray, filled: np.ndarray) -> i
 
 
 @nb.njit(cache=True)
-def pick_seeds(codes: np.ndarray, state: np.ndarray, position: int, n_free: int) -> np.ndarray:  # pragma: no cover
+def pick_seeds(
+    codes: np.ndarray, state: np.ndarray, position: int, n_free: int, reached: np.ndarray
+) -> np.ndarray:  # pragma: no cover - numba
     """Row-major indices of the fewest seeds from which :func:`scanline_fill` with ``codes`` reaches every
     free cell of the CellState grid ``state``: the robot's cell (``position``, if free) first, then the
     first interior cell (code 0) not yet reached, repeatedly. Cells with a code are in the message anyway;
     a component made only of them needs no seed. ``n_free``: the free cells of ``state`` where the caller
-    knows them (-1: not known); when the robot's own fill reaches that many, no other component is sought."""
+    knows them (-1: not known); when the robot's own fill reaches that many, no other component is sought.
+    ``reached[0]`` is set to the cells the robot's own fill reached (-1: its cell is not free)."""
     H, W = codes.shape
     filled = np.zeros((H, W), dtype=np.bool_)
     out = []
+    reached[0] = -1
     if 0 <= position < H * W and state[position // W, position % W] == _FREE:
         out.append(position)
-        if scanline_fill(codes, np.array([position], dtype=np.int64), filled) == n_free:
+        reached[0] = scanline_fill(codes, np.array([position], dtype=np.int64), filled)
+        if reached[0] == n_free:
             return np.array([position], dtype=np.int64)
     for r in range(H):
         for c in range(W):
@@ -223,3 +229,46 @@ def occupied_in(codes: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray
                 if (code >> (4 + d)) & 1 and r0 <= rr < r1 and c0 <= cc < c1:
                     out[rr - r0, cc - c0] = True
     return out
+
+
+@nb.njit(cache=True, nogil=True)
+def joined_in_box(state: np.ndarray, box: tuple[int, int, int, int]) -> bool:  # pragma: no cover - numba
+    """Whether every free cell of ``box`` in the CellState grid ``state`` is joined, by 4-connected free
+    cells inside the box, to a free cell just outside it; False where no free cell outside touches the
+    box. Free space that was one component and lost no cell stays one component after gaining cells in
+    ``box`` exactly when this holds (:meth:`~mrexplore.preprocessing.onboard.OnBoardGrid.seeds`)."""
+    H, W = state.shape
+    r0, r1, c0, c1 = box
+    h, w = r1 - r0, c1 - c0
+    seen = np.zeros((h, w), dtype=np.bool_)
+    stack = np.empty(h * w, dtype=np.int64)
+    n = 0
+    for r in range(r0, r1):  # entries: free cells of the box with a free 4-neighbour outside it
+        for c in range(c0, c1):
+            if (r == r0 or r == r1 - 1 or c == c0 or c == c1 - 1) and state[r, c] == _FREE:
+                for d in range(4):
+                    rr, cc = r + _DR[d], c + _DC[d]
+                    outside = rr < r0 or rr >= r1 or cc < c0 or cc >= c1
+                    if outside and 0 <= rr < H and 0 <= cc < W and state[rr, cc] == _FREE:
+                        if not seen[r - r0, c - c0]:
+                            seen[r - r0, c - c0] = True
+                            stack[n] = (r - r0) * w + (c - c0)
+                            n += 1
+                        break
+    if n == 0:
+        return False
+    while n > 0:
+        n -= 1
+        k = stack[n]
+        r, c = k // w, k % w
+        for d in range(4):
+            rr, cc = r + _DR[d], c + _DC[d]
+            if 0 <= rr < h and 0 <= cc < w and not seen[rr, cc] and state[rr + r0, cc + c0] == _FREE:
+                seen[rr, cc] = True
+                stack[n] = rr * w + cc
+                n += 1
+    for r in range(h):
+        for c in range(w):
+            if state[r + r0, c + c0] == _FREE and not seen[r, c]:
+                return False
+    return True

@@ -122,7 +122,7 @@ def component_seeds(
     r, c = position_rc
     inside = 0 <= r < state.shape[0] and 0 <= c < state.shape[1]
     position = r * state.shape[1] + c if inside else -1
-    return np.sort(pick_seeds(codes, state, position, -1 if n_free is None else n_free))
+    return np.sort(pick_seeds(codes, state, position, -1 if n_free is None else n_free, np.zeros(1, np.int64)))
 
 
 def sparse_frontier_map(
@@ -169,10 +169,12 @@ def coded_frontier_map(
     shape: tuple[int, int] | None = None,
     cells: NDArray[np.int64] | None = None,
     n_free: int | None = None,
+    seeds: NDArray[np.int64] | None = None,
 ) -> SparseFrontierMap:
     """:func:`sparse_frontier_map` from a grid whose neighbour codes (``(h, w) uint8``, those of
     :func:`neighbour_codes` on the whole map, cut to the window) the robot already holds; ``cells``, the
-    map indices of the cells with a code (sorted), and ``n_free``, the free cells, where it keeps them."""
+    map indices of the cells with a code (sorted), ``n_free``, the free cells, and ``seeds``, the window's
+    :func:`component_seeds`, where it keeps them."""
     shape = state.shape if shape is None else shape
     r0, c0 = origin_rc
     r, c = int(position_rc[0]), int(position_rc[1])
@@ -180,7 +182,8 @@ def coded_frontier_map(
         cells, values = coded_cells(codes, r0, c0, shape[1])
     else:
         values = codes[cells // shape[1] - r0, cells % shape[1] - c0]
-    seeds = component_seeds(state, codes, (r - r0, c - c0), n_free)
+    if seeds is None:
+        seeds = component_seeds(state, codes, (r - r0, c - c0), n_free)
     return SparseFrontierMap(
         robot, round_, shape, (r, c), cells, values, _to_map(seeds, state.shape[1], r0, c0, shape[1])
     )

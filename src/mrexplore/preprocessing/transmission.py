@@ -159,8 +159,9 @@ class RobotSender:
         the delta compared only where the grid changed since the last acknowledgement."""
         origin, shape = (window[0].start, window[1].start), self._acked.shape
         closed, codes = grid.closed[window], grid.codes[window]
+        seeds = grid.seeds(position_rc, window)
         full = coded_frontier_map(
-            closed, codes, self.robot, round_, position_rc, origin, shape, grid.cells, grid.n_free
+            closed, codes, self.robot, round_, position_rc, origin, shape, grid.cells, grid.n_free, seeds
         )
         box = self._changed if self._changed is not None else _EMPTY
         return self._both(full, lambda: changed_in_box(self._acked, grid.codes, full, self._acked_round, box))
