@@ -103,9 +103,9 @@ def test_a_robot_returning_to_goals_it_gave_up_commits_to_its_goal() -> None:
     decide = strategy.decide
     calls = [0]
 
-    def flipping(state, robots_rc, resolution_m, blacklist=None, current=None, rng=None):
+    def flipping(state, robots_rc, resolution_m, blacklist=None, current=None, rng=None, frontiers=None):
         """Each decision sends the robot to the frontier at the end it is not heading for."""
-        d = decide(state, robots_rc, resolution_m, blacklist, current, rng)
+        d = decide(state, robots_rc, resolution_m, blacklist, current, rng, frontiers)
         if d.done_reason is not None:
             return d
         calls[0] += 1
