@@ -18,6 +18,7 @@ __all__ = [
     "fill_leaves_box",
     "occupied_in",
     "joined_in_box",
+    "refill_box",
 ]
 
 _FREE, _OCCUPIED, _UNKNOWN = 0, 1, 2  # CellState values
@@ -271,4 +272,69 @@ def joined_in_box(state: np.ndarray, box: tuple[int, int, int, int]) -> bool:  #
         for c in range(w):
             if state[r + r0, c + c0] == _FREE and not seen[r, c]:
                 return False
+    return True
+
+
+@nb.njit(cache=True, nogil=True)
+def refill_box(
+    codes: np.ndarray,
+    seeds: np.ndarray,
+    free: np.ndarray,
+    occupied: np.ndarray,
+    free_n: np.ndarray,
+    occupied_n: np.ndarray,
+    box: tuple[int, int, int, int],
+    free_box: np.ndarray,
+) -> bool:  # pragma: no cover - numba
+    """One robot's kept ``free`` and ``occupied`` cells redone in ``box`` from its ``codes`` and ``seeds``
+    (row-major map indices), in place, with the per-cell robot counts ``free_n`` and ``occupied_n``; the
+    centre's step for a delta (:class:`~mrexplore.preprocessing.reconstruction.CentreMap`). The fill
+    starts from the seeds in the box and where the kept free space just outside steps in
+    (:func:`entry_seeds`). Returns False, changing nothing, where only a whole rebuild can say: a seed
+    outside the box lies outside the kept free space, or the fill steps out of the box into a cell that
+    was not free (:func:`fill_leaves_box`). ``free_box`` (4 ints) receives the box of the free cells now
+    in ``box`` (rows r0 > r1 where there are none)."""
+    H, W = codes.shape
+    r0, r1, c0, c1 = box
+    h, w = r1 - r0, c1 - c0
+    entries = entry_seeds(codes, free, box)
+    start = np.empty(len(seeds) + len(entries), dtype=np.int64)
+    n = 0
+    for s in seeds:
+        r, c = s // W, s % W
+        if r0 <= r < r1 and c0 <= c < c1:
+            start[n] = (r - r0) * w + (c - c0)
+            n += 1
+        elif not free[r, c]:
+            return False
+    for e in entries:
+        start[n] = e
+        n += 1
+    filled = np.zeros((h, w), dtype=np.bool_)
+    scanline_fill(codes[r0:r1, c0:c1], start[:n], filled)
+    if fill_leaves_box(codes, free, filled, box):
+        return False
+    marks = occupied_in(codes, box)
+    free_box[0], free_box[1], free_box[2], free_box[3] = r1, r0, c1, c0
+    for r in range(r0, r1):
+        for c in range(c0, c1):
+            now = filled[r - r0, c - c0] or codes[r, c] != 0
+            if now != free[r, c]:
+                free[r, c] = now
+                if now:
+                    free_n[r, c] += 1
+                else:
+                    free_n[r, c] -= 1
+            if now:
+                free_box[0] = min(free_box[0], r)
+                free_box[1] = max(free_box[1], r + 1)
+                free_box[2] = min(free_box[2], c)
+                free_box[3] = max(free_box[3], c + 1)
+            mark = marks[r - r0, c - c0]
+            if mark != occupied[r, c]:
+                occupied[r, c] = mark
+                if mark:
+                    occupied_n[r, c] += 1
+                else:
+                    occupied_n[r, c] -= 1
     return True
