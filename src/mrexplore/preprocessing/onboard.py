@@ -123,8 +123,7 @@ class OnBoardGrid:
         r, c = int(position_rc[0]), int(position_rc[1])
         r0, c0 = window[0].start, window[1].start
         w = window[1].stop - c0
-        H, W = self.closed.shape
-        here = r0 <= r < window[0].stop and c0 <= c < window[1].stop and 0 <= r < H and 0 <= c < W
+        here = r0 <= r < window[0].stop and c0 <= c < window[1].stop  # the window lies in the grid
         on_free = here and self.closed[r, c] == CellState.FREE
         box, lost = self._seed_box, self._lost_free
         self._seed_box, self._lost_free = None, False

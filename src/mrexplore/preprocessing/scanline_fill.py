@@ -319,22 +319,22 @@ def refill_box(
     for r in range(r0, r1):
         for c in range(c0, c1):
             now = filled[r - r0, c - c0] or codes[r, c] != 0
-            if now != free[r, c]:
-                free[r, c] = now
-                if now:
-                    free_n[r, c] += 1
-                else:
-                    free_n[r, c] -= 1
+            _set_counted(free, free_n, r, c, now)
+            _set_counted(occupied, occupied_n, r, c, marks[r - r0, c - c0])
             if now:
                 free_box[0] = min(free_box[0], r)
                 free_box[1] = max(free_box[1], r + 1)
                 free_box[2] = min(free_box[2], c)
                 free_box[3] = max(free_box[3], c + 1)
-            mark = marks[r - r0, c - c0]
-            if mark != occupied[r, c]:
-                occupied[r, c] = mark
-                if mark:
-                    occupied_n[r, c] += 1
-                else:
-                    occupied_n[r, c] -= 1
     return True
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _set_counted(mask: np.ndarray, counts: np.ndarray, r: int, c: int, now: bool) -> None:  # pragma: no cover
+    """Set ``mask[r, c]`` to ``now``, moving the per-cell robot count with it."""
+    if now != mask[r, c]:
+        mask[r, c] = now
+        if now:
+            counts[r, c] += 1
+        else:
+            counts[r, c] -= 1
