@@ -141,6 +141,28 @@ def test_routes_on_threads_give_the_mission_inline_routes_give(small_map, monkey
     assert threaded == inline
 
 
+def test_baseline_bytes_counted_on_threads_equal_those_counted_inline(small_map, monkeypatch) -> None:
+    # Table II's baseline grids are compressed on the threads where more than one is allowed: the byte
+    # counts, and every other record but the timings, are those of one thread.
+    import mrexplore.preprocessing.transmission as transmission
+
+    batches: list[int] = []
+    plain = transmission.map_threads
+
+    def spied(fn, items):
+        batches.append(len(items))
+        return plain(fn, items)
+
+    monkeypatch.setattr(transmission, "map_threads", spied)
+    runs = []
+    for threads in ("1", "2"):
+        monkeypatch.setenv("MREXPLORE_THREADS", threads)
+        runs.append(run_mission(small_map, make_strategy("utility"), SimConfig(robots=3), seed=2).measures.to_dict())
+    one, two = ({k: v for k, v in r.items() if k not in TIMING_KEYS} for r in runs)
+    assert max(batches) == 3  # all three robots' grids in one batch at some round
+    assert one["bytes_grid_zlib"] > 0 and two == one
+
+
 @pytest.mark.parametrize(("commitment", "goal"), [(1.0, [2, 7]), (0.4, [2, 1])])
 def test_commitment_keeps_a_robot_on_its_goal(commitment: float, goal: list[int]) -> None:
     # The robot at (2, 5) heads for the left end (4 cells away); the right end is 2 cells away.
