@@ -155,9 +155,8 @@ def _updated_cells(cells: np.ndarray, changed: np.ndarray, codes: np.ndarray) ->
 
 
 def _union(a: Box | None, b: Box | None) -> Box | None:
-    if a is None or b is None:
-        return b if a is None else a
-    return min(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), max(a[3], b[3])
+    """:func:`~mrexplore.boxes.box_union` where ``b`` may be None too."""
+    return a if b is None else box_union(a, b)
 
 
 def _merged_state(free: BoolGrid, occupied: BoolGrid, box: Box | None, closing_size_cells: int) -> StateGrid:

@@ -372,7 +372,7 @@ class TeamLink:
         robot_s = accounting_s = 0.0
         self.robot_ms_each = []
         to_count: list[tuple[int, tuple[int, tuple[slice, slice]], StateGrid]] = []
-        counted: list[int] = []
+        counted: list[int] = []  # robots whose grid bytes are known, kept from an earlier round or not
         # A robot's message covers the box of its observed cells, grown by the closing's reach plus one
         # cell: the closing, the codes and the seeds there equal those of the whole grid (nothing beyond
         # is free).
@@ -406,13 +406,11 @@ class TeamLink:
         # The baseline grids, compressed on the threads (zlib and the box's pass let go of the GIL): on a
         # KTH floor they were a fifth of a whole mission's time on one thread.
         sizes = map_threads(lambda job: occupancy_grid_bytes(job[2]), to_count)
-        for (i, key, _), (raw, packed) in zip(to_count, sizes, strict=True):
-            self._grid_bytes[i] = key, (raw, packed)
+        for (i, key, _), counts in zip(to_count, sizes, strict=True):
+            self._grid_bytes[i] = key, counts
+            counted.append(i)
         for i in counted:
             raw, packed = self._grid_bytes[i][1]  # type: ignore[index]
-            self.totals.bytes_grid += raw
-            self.totals.bytes_grid_zlib += packed
-        for raw, packed in sizes:
             self.totals.bytes_grid += raw
             self.totals.bytes_grid_zlib += packed
         accounting_s += time.perf_counter() - t0
