@@ -13,6 +13,7 @@ from conftest import NARROW_GAP, bool_grid, seeded_dijkstra
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import mrexplore.paths.far_field as far_field
 from mrexplore.paths.astar import path_length_cells
 from mrexplore.paths.distance_field import _Searches, distance_fields
 from mrexplore.paths.far_field import (
@@ -128,6 +129,30 @@ def test_a_source_behind_a_closed_passage_gets_one_exact_search_for_every_cell_i
     want = distance_fields(g, sources[:1])[0].at(must)
     np.testing.assert_allclose(b.at(must), want, rtol=1e-6)  # exact through the gap
     np.testing.assert_array_equal(a.at(must), alone[1].at(must))  # A keeps its own estimates
+
+
+def test_a_cell_no_block_next_to_it_reaches_is_joined_to_the_robots_own_coarse_fields(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # An open hall with a pocket of posts (one every third cell, so no 3 x 3 block there is wholly free)
+    # round the cell: no block next to it is passable, and both robots, far away, leave it at inf.
+    g = np.ones((30, 90), bool)
+    for r in range(10, 22, 3):
+        for c in range(76, 88, 3):
+            g[r, c] = False
+    cell, sources = np.array([[14, 80]]), np.array([[3, 3], [26, 10]])
+    grid = coarse_grid(g, 3)
+    assert grid is not None
+    assert not np.isfinite([f.value(14, 80) for f in far_fields(g, sources, 10, 3, grid=grid)]).any()
+    searches: list[str] = []
+    seeded = far_field._seeded_search
+    monkeypatch.setattr(far_field, "_seeded_search", lambda *a: searches.append("coarse") or seeded(*a))
+    monkeypatch.setattr(type(grid), "exact_at", lambda *a: searches.append("exact"))
+    fields = far_fields(g, sources, 10, 3, must_rc=cell, grid=grid)
+    assert searches == ["coarse", "coarse"]  # the robots' own: none from the cell, no exact search
+    got = [f.value(14, 80) for f in fields]
+    want = [distance_fields(g, s[None])[0].value(14, 80) for s in sources]  # straight across the hall
+    np.testing.assert_allclose(got, want, rtol=1e-6)
 
 
 @settings(max_examples=200, deadline=None)

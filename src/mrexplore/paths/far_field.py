@@ -333,36 +333,83 @@ def _near_box(passable: BoolGrid, rc: NDArray[np.integer], radius: int) -> tuple
     return max(0, r - radius), min(H, r + radius + 1), max(0, c - radius), min(W, c + radius + 1)
 
 
-def _one(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius: int) -> NearFarField:
+@dataclass(frozen=True)
+class _Seeds:
+    """A source's exact part and the coarse grid's blocks it reaches within the radius: the passable blocks
+    whose middle cell it reaches, sorted by their distance there (stable: row-major among equals)."""
+
+    near: Field
+    blocks: NDArray[np.int64]
+    """``(k, 2) int64`` the seed blocks."""
+    cells: NDArray[np.float64]
+    """``(k,) float64`` the exact distance from the source to each block's middle cell, in cells."""
+
+
+def _seeds(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius: int) -> _Seeds:
     r0, r1, c0, c1 = _near_box(passable, src, radius)
     # Stopped at the radius: beyond it the field reads the coarse estimate, and seeds and paths stay within.
     local = np.array([[int(src[0]) - r0, int(src[1]) - c0]])
     near = distance_fields(passable[r0:r1, c0:c1], local, limit=float(radius))[0]
     near = Field(near.values, near.r0 + r0, near.c0 + c0, (int(passable.shape[0]), int(passable.shape[1])))
-    # Seeds: the passable blocks whose middle cell the exact search reached within the radius.
     f = grid.factor
     h, w = grid.passable.shape
     blk_r0 = max(0, (r0 - grid.r0) // f)
     blk_r1 = min(h, -(-(r1 - grid.r0) // f))
     blk_c0 = max(0, (c0 - grid.c0) // f)
     blk_c1 = min(w, -(-(c1 - grid.c0) // f))
+    if blk_r1 <= blk_r0 or blk_c1 <= blk_c0:
+        return _Seeds(near, np.zeros((0, 2), np.int64), np.zeros(0))
+    rr, cc = np.nonzero(grid.passable[blk_r0:blk_r1, blk_c0:blk_c1])
+    blocks = np.stack([rr + blk_r0, cc + blk_c0], axis=1)
+    d = near.at(grid.centres_rc(blocks))
+    keep = d <= radius
+    blocks, d = blocks[keep], d[keep]
+    order = np.argsort((d / f).astype(np.float32), kind="stable")
+    return _Seeds(near, blocks[order], d[order])
+
+
+def _one(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius: int) -> NearFarField:
+    seeds = _seeds(passable, grid, src, radius)
+    # Seeds: the passable blocks whose middle cell the exact search reached within the radius.
+    f = grid.factor
+    h, w = grid.passable.shape
+    blocks, keys = seeds.blocks, (seeds.cells / f).astype(np.float32)
     seed_key = np.full(grid.passable.shape, np.inf, dtype=np.float32)
-    if blk_r1 > blk_r0 and blk_c1 > blk_c0:
-        rr, cc = np.nonzero(grid.passable[blk_r0:blk_r1, blk_c0:blk_c1])
-        blocks = np.stack([rr + blk_r0, cc + blk_c0], axis=1)
-        d = near.at(grid.centres_rc(blocks))
-        keep = d <= radius
-        blocks, keys = blocks[keep], (d[keep] / f).astype(np.float32)
-        order = np.argsort(keys, kind="stable")
-        blocks, keys = blocks[order], keys[order]
-        seed_key[blocks[:, 0], blocks[:, 1]] = keys
-    else:
-        blocks, keys = np.zeros((0, 2), np.int64), np.zeros(0, np.float32)
+    seed_key[blocks[:, 0], blocks[:, 1]] = keys
     s = grid.search
     q_node, q_key, _ = s.scratch()
-    seeds = s.padded(blocks[:, 0] * w + blocks[:, 1])
-    coarse = _seeded_search(s.start, s.wp, seeds, keys, q_node, q_key).reshape(h + 2, w + 2)[1:-1, 1:-1]
-    return NearFarField(near, float(radius), coarse, grid, seed_key)
+    flat = s.padded(blocks[:, 0] * w + blocks[:, 1])
+    coarse = _seeded_search(s.start, s.wp, flat, keys, q_node, q_key).reshape(h + 2, w + 2)[1:-1, 1:-1]
+    return NearFarField(seeds.near, float(radius), coarse, grid, seed_key)
+
+
+def _back(
+    passable: BoolGrid,
+    grid: CoarseGrid,
+    cell: NDArray[np.int64],
+    radius: int,
+    sources: NDArray[np.int64],
+    fields: Sequence[NearFarField],
+) -> NDArray[np.float64]:
+    """Distances from ``cell`` to each of ``sources`` (whose near/far fields are ``fields``), ``(n,)
+    float64``, without a search over the coarse grid: exact where the cell's own exact part reaches the
+    source; else the best way along the source's coarse field into a block whose middle the cell's exact
+    part reaches, then exactly to the cell: a real path, as every estimate is (distances are symmetric);
+    ``inf`` where there is none.
+
+    A near/far field of the cell's own, read at the sources, went the same ways the other way round, with
+    a coarse search of its own: late on a KTH floor at 0.05 m, two such fields a decision (cluster centres
+    in ragged, ray-lit free space that no block next to them reaches) were a fifth of the decision's
+    coarse searches (``perf/replay_far_fields.py``)."""
+    seeds = _seeds(passable, grid, cell, radius)
+    out = np.full(len(sources), np.inf)
+    if len(seeds.blocks) and len(fields):
+        coarse = np.stack([fl.coarse[seeds.blocks[:, 0], seeds.blocks[:, 1]] for fl in fields])
+        out = np.min(coarse.astype(np.float64) * grid.factor + seeds.cells[None, :], axis=1)
+    exact = seeds.near.at(sources)
+    inside = exact <= radius
+    out[inside] = exact[inside]
+    return out
 
 
 def _fewest_searches(pairs: NDArray[np.bool_]) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
@@ -423,9 +470,10 @@ def far_fields(
     ``must_rc`` (``(k, 2) int``, e.g. cluster centres): cells every field must answer where the exact
     search does. Where the coarse grid leaves some at ``inf`` (behind a passage it closes, or a source
     behind one), the fewest sources and cells that cover every such pair are searched: a source by one
-    exact search stopped at the cells it leaves; a cell by a near/far field of its own, read at the
-    sources (distances are symmetric; its exact part goes through the passage), and an exact search from
-    it to the sources that one leaves at ``inf`` too (the other sources read the cell's field there).
+    exact search stopped at the cells it leaves; a cell by an exact search of its own up to the radius,
+    joined to the sources' coarse fields (:func:`_back`; distances are symmetric, its exact part goes
+    through the passage), and an exact search from it to the sources that leaves at ``inf`` too (the
+    other sources read the cell's distances so found).
     Those values go into the fields' :attr:`~NearFarField.known`. ``own_rc``: per source, cells only
     that source must answer (its current goal); where the coarse grid leaves one at ``inf``, an exact
     search from the source stopped at them. ``grid``: :func:`coarse_grid` of the same ``passable`` and
@@ -478,10 +526,11 @@ def far_fields(
             for cell, d in zip(cells, exact(sources[i], cells), strict=True):
                 fields[i].known[(int(cell[0]), int(cell[1]))] = float(d)
         for cell in must[back]:
-            # From the cell: exact through its passage, then the coarse grid; exact all the way if need be.
+            # From the cell: exact through its passage, on along the sources' own coarse fields (no search of
+            # its own, :func:`_back`); exact all the way if need be.
             key = (int(cell[0]), int(cell[1]))
             searched = np.array([key in f.known for f in fields])  # exact already, from its source
-            d = _one(passable, grid, cell, radius_cells).at(sources)
+            d = _back(passable, grid, cell, radius_cells, sources, fields)
             still = ~np.isfinite(d) & ~searched
             if still.any():
                 d[still] = exact(cell, sources[still])
