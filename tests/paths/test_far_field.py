@@ -235,7 +235,7 @@ def test_a_search_stopped_at_a_radius_keeps_every_distance_within_it(seed: int, 
 
 @settings(max_examples=80, deadline=None)
 @given(st.integers(0, 10**6), st.integers(1, 4))
-def test_pooling_in_one_pass_equals_numpy_on_padded_blocks(seed: int, factor: int) -> None:
+def test_pooling_in_bands_of_block_rows_equals_numpy_on_padded_blocks(seed: int, factor: int) -> None:
     rng = np.random.default_rng(seed)
     g = rng.random((int(rng.integers(1, 25)), int(rng.integers(1, 25)))) < 0.9
     g[int(rng.integers(0, g.shape[0])), int(rng.integers(0, g.shape[1]))] = True

@@ -198,6 +198,10 @@ def _pool(passable: np.ndarray, r0: int, r1: int, c0: int, c1: int, f: int) -> n
     return out
 
 
+_POOL_BANDS = 2
+"""Bands of block rows :meth:`CoarseGrid.of` pools on the threads (inline where one thread is allowed)."""
+
+
 @dataclass(frozen=True)
 class CoarseGrid:
     """The passable grid pooled into ``factor`` x ``factor`` blocks from fine cell ``(r0, c0)``: a block
@@ -221,7 +225,14 @@ class CoarseGrid:
         if box is None:
             return None
         r0, r1, c0, c1 = box
-        pooled = _pool(np.ascontiguousarray(passable), r0, r1, c0, c1, factor)
+        grid = np.ascontiguousarray(passable)
+        # Bands of whole block rows on the threads (the kernel releases the GIL; only the last band
+        # meets the box's far edge, so each block is pooled as in one pass).
+        rows = -(-(r1 - r0) // factor)
+        cuts = [r0 + factor * (rows * k // _POOL_BANDS) for k in range(_POOL_BANDS)] + [r1]
+        bands = [(a, b) for a, b in zip(cuts[:-1], cuts[1:], strict=True) if b > a]
+        parts = map_threads(lambda ab: _pool(grid, ab[0], ab[1], c0, c1, factor), bands)
+        pooled = parts[0] if len(parts) == 1 else np.vstack(parts)
         return cls(pooled, factor, r0, c0, _Searches(pooled), passable)
 
     def tails(self, cells: NDArray[np.int64]) -> NDArray[np.float64]:

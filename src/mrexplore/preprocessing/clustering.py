@@ -289,7 +289,7 @@ def _disc_sum(
     return count, sum_r, sum_c
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def _shift(
     starts: np.ndarray,
     cols: np.ndarray,
@@ -334,7 +334,16 @@ def bin_seeds(points: NDArray[np.float64], bin_size: float) -> NDArray[np.floati
     [[0.0, 0.0], [3.0, 1.0]]
     """
     binned = np.round(points / bin_size)
-    _, first = np.unique(binned, axis=0, return_index=True)
+    if binned.ndim == 2 and binned.shape[1] == 2 and len(binned):
+        # Each bin as one integer (row-major over the occupied span): a 1-D unique instead of numpy's
+        # row-wise one, which sorts structured rows (3.4 ms of a 9.2 ms Mean-Shift of 7,600 frontier cells
+        # late on a KTH floor at 0.05 m); first occurrences either way.
+        cells = binned.astype(np.int64)
+        low = cells.min(axis=0)
+        span = int(cells[:, 1].max() - low[1]) + 1
+        _, first = np.unique((cells[:, 0] - low[0]) * span + (cells[:, 1] - low[1]), return_index=True)
+    else:
+        _, first = np.unique(binned, axis=0, return_index=True)
     if len(first) == len(points):
         return points
     return binned[np.sort(first)].astype(np.float32) * bin_size
