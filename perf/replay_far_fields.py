@@ -8,10 +8,12 @@
 ``record`` runs one `hier` mission (0.05 m, seed 0) untimed until the team's coverage reaches
 ``--from-coverage``, then keeps the arguments of the next ``--calls`` calls of ``far_fields`` (the robots'
 distances at a decision on a large floor): the passable grid, the robots, the cluster centres, the robots'
-own goals. ``replay`` runs each kept call through the ``far_fields`` of whatever checkout it imports, twice
-(the first run may compile numba's caches), and prints the second run's milliseconds per call and how many
-exact searches and near/far fields it made. Versions compared this way see the same calls, which whole
-missions do not once they part. The recording is a pickle of numpy arrays; read only files you made.
+own goals. ``replay`` runs each kept call through the ``far_fields`` of whatever checkout it imports, once
+untimed (it may compile numba's caches), then ``--repeats`` times, and prints the least of those runs'
+milliseconds per call (the least disturbed: timings here swing by a fifth from run to run) and how many
+exact searches and near/far fields it made (``--save``: also the robots' distances at the centres, for
+``diff A.npz B.npz`` to say where two versions' differ). Versions compared this way see the same calls,
+which whole missions do not once they part. The recording is a pickle of numpy arrays; read only files you made.
 """
 
 from __future__ import annotations
@@ -83,17 +85,34 @@ def _replay(args: argparse.Namespace) -> None:
     far_field.CoarseGrid.exact_at = counted("exact searches", far_field.CoarseGrid.exact_at)  # type: ignore[method-assign]
     far_field._one = counted("near/far fields", far_field._one)
     print(f"far_fields from {far_field.__file__}")
+    read: list[np.ndarray] = []
     for c in calls:
         h, w = c["shape"]
         passable = np.unpackbits(c["passable"])[: h * w].reshape(h, w).astype(bool)
-        for _ in range(2):  # the second run is timed: the first may compile
+        times = []
+        for _ in range(1 + args.repeats):  # the first run may compile and is not timed
             grid = far_field.coarse_grid(passable, c["factor"])
             counts.clear()
             t = time.perf_counter()
-            far_field.far_fields(passable, c["sources"], c["radius"], c["factor"], c["must"], c["own"], grid)
-            ms = 1e3 * (time.perf_counter() - t)
+            fields = far_field.far_fields(passable, c["sources"], c["radius"], c["factor"], c["must"], c["own"], grid)
+            times.append(1e3 * (time.perf_counter() - t))
+        read.append(np.stack([f.at(c["must"]) for f in fields]))
+        ms = min(times[1:])  # the least disturbed run: this machine's timings swing by a fifth
         made = ", ".join(f"{n} {k}" for k, n in sorted(counts.items()))
         print(f"{ms:8.1f} ms  ({len(c['sources'])} robots, {len(c['must'])} centres; {made})")
+    if args.save is not None:
+        np.savez(args.save, *read)
+
+
+def _diff(args: argparse.Namespace) -> None:
+    """Where two replays' robot-centre distances differ, call by call."""
+    a, b = np.load(args.a), np.load(args.b)
+    for key in a.files:
+        x, y = a[key], b[key]
+        moved = x != y
+        rel = np.abs(y[moved] - x[moved]) / x[moved] if moved.any() else np.zeros(1)
+        mean = float(np.mean(y[moved] - x[moved])) if moved.any() else 0.0
+        print(f"{int(moved.sum())} of {x.size} differ, by at most {100 * rel.max():.1f}%, {mean:+.2f} cells on average")
 
 
 def main() -> int:
@@ -107,8 +126,13 @@ def main() -> int:
     rec.add_argument("--out", type=Path, required=True)
     rep = sub.add_parser("replay")
     rep.add_argument("calls", type=Path)
+    rep.add_argument("--repeats", type=int, default=3, help="timed runs per call; the least is printed")
+    rep.add_argument("--save", type=Path, default=None, help="the robots' distances at the centres (.npz)")
+    dif = sub.add_parser("diff")
+    dif.add_argument("a", type=Path)
+    dif.add_argument("b", type=Path)
     args = ap.parse_args()
-    _record(args) if args.what == "record" else _replay(args)
+    {"record": _record, "replay": _replay, "diff": _diff}[args.what](args)
     return 0
 
 
