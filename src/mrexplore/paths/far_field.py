@@ -357,6 +357,9 @@ class _Seeds:
 
 
 def _seeds(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius: int) -> _Seeds:
+    """The exact search from ``src`` up to ``radius`` cells and the blocks it seeds (:class:`_Seeds`): what a
+    near/far field starts its coarse search from (:func:`_one`), and what joins a cell to the sources'
+    coarse fields (:func:`_back`)."""
     r0, r1, c0, c1 = _near_box(passable, src, radius)
     # Stopped at the radius: beyond it the field reads the coarse estimate, and seeds and paths stay within.
     local = np.array([[int(src[0]) - r0, int(src[1]) - c0]])
@@ -381,7 +384,6 @@ def _seeds(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radiu
 
 def _one(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius: int) -> NearFarField:
     seeds = _seeds(passable, grid, src, radius)
-    # Seeds: the passable blocks whose middle cell the exact search reached within the radius.
     f = grid.factor
     h, w = grid.passable.shape
     blocks, keys = seeds.blocks, (seeds.cells / f).astype(np.float32)
