@@ -96,7 +96,8 @@ def _replay(args: argparse.Namespace) -> None:
             t = time.perf_counter()
             fields = far_field.far_fields(passable, c["sources"], c["radius"], c["factor"], c["must"], c["own"], grid)
             times.append(1e3 * (time.perf_counter() - t))
-        read.append(np.stack([f.at(c["must"]) for f in fields]))
+        if args.save is not None:
+            read.append(np.stack([f.at(c["must"]) for f in fields]))
         ms = min(times[1:])  # the least disturbed run: this machine's timings swing by a fifth
         made = ", ".join(f"{n} {k}" for k, n in sorted(counts.items()))
         print(f"{ms:8.1f} ms  ({len(c['sources'])} robots, {len(c['must'])} centres; {made})")

@@ -416,7 +416,7 @@ def _back(
     coarse searches (``perf/replay_far_fields.py``)."""
     seeds = _seeds(passable, grid, cell, radius)
     out = np.full(len(sources), np.inf)
-    if len(seeds.blocks) and len(fields):
+    if len(seeds.blocks):
         coarse = np.stack([fl.coarse[seeds.blocks[:, 0], seeds.blocks[:, 1]] for fl in fields])
         out = np.min(coarse.astype(np.float64) * grid.factor + seeds.cells[None, :], axis=1)
     exact = seeds.near.at(sources)
