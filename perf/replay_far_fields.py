@@ -89,12 +89,13 @@ def _replay(args: argparse.Namespace) -> None:
     for c in calls:
         h, w = c["shape"]
         passable = np.unpackbits(c["passable"])[: h * w].reshape(h, w).astype(bool)
+        factor = args.factor or c["factor"]
         times = []
         for _ in range(1 + args.repeats):  # the first run may compile and is not timed
-            grid = far_field.coarse_grid(passable, c["factor"])
+            grid = far_field.coarse_grid(passable, factor)
             counts.clear()
             t = time.perf_counter()
-            fields = far_field.far_fields(passable, c["sources"], c["radius"], c["factor"], c["must"], c["own"], grid)
+            fields = far_field.far_fields(passable, c["sources"], c["radius"], factor, c["must"], c["own"], grid)
             times.append(1e3 * (time.perf_counter() - t))
         if args.save is not None:
             read.append(np.stack([f.at(c["must"]) for f in fields]))
@@ -129,6 +130,7 @@ def main() -> int:
     rep.add_argument("calls", type=Path)
     rep.add_argument("--repeats", type=int, default=3, help="timed runs per call; the least is printed")
     rep.add_argument("--save", type=Path, default=None, help="the robots' distances at the centres (.npz)")
+    rep.add_argument("--factor", type=int, default=None, help="pool blocks of this many cells a side instead")
     dif = sub.add_parser("diff")
     dif.add_argument("a", type=Path)
     dif.add_argument("b", type=Path)
