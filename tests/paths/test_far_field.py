@@ -155,6 +155,31 @@ def test_a_cell_no_block_next_to_it_reaches_is_joined_to_the_robots_own_coarse_f
     np.testing.assert_allclose(got, want, rtol=1e-6)
 
 
+def test_a_cell_whose_radius_joins_no_block_tries_twice_the_radius_before_an_exact_search(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Posts at every third row and column from column 61 on: every 3 x 3 block there holds one, so the
+    # nearest passable blocks to the cell (column 70) are those of columns 57-59, 11-13 cells away. Within
+    # the radius (8) the cell joins none; within twice the radius it joins the robots' fields.
+    g = np.ones((30, 90), bool)
+    for r in range(1, 30, 3):
+        for c in range(61, 90, 3):
+            g[r, c] = False
+    cell, sources, radius = np.array([[15, 70]]), np.array([[3, 3], [26, 10]]), 8
+    grid = coarse_grid(g, 3)
+    assert grid is not None
+    alone = far_fields(g, sources, radius, 3, grid=grid)
+    assert not np.isfinite(far_field._back(g, grid, cell[0], radius, sources, alone)).any()
+    searches: list[str] = []
+    monkeypatch.setattr(type(grid), "exact_at", lambda *a: searches.append("exact"))
+    fields = far_fields(g, sources, radius, 3, must_rc=cell, grid=grid)
+    assert searches == []  # joined at twice the radius: no search over the floor
+    got = np.array([f.value(15, 70) for f in fields])
+    want = np.array([distance_fields(g, s[None])[0].value(15, 70) for s in sources])
+    # A real path (never shorter) through whole free blocks: within a block's diagonal of the shortest.
+    assert (got >= want - 1e-6).all() and (got <= want + 3 * math.sqrt(2)).all()
+
+
 @settings(max_examples=200, deadline=None)
 @given(st.integers(1, 5), st.integers(1, 6), st.integers(0, 10**6))
 def test_the_searches_chosen_cover_every_pair_left_at_inf_and_are_as_few_as_can_be(n: int, k: int, seed: int) -> None:
