@@ -12,7 +12,8 @@ own goals. ``replay`` runs each kept call through the ``far_fields`` of whatever
 untimed (it may compile numba's caches), then ``--repeats`` times, and prints the least of those runs'
 milliseconds per call (the least disturbed: timings here swing by a fifth from run to run) and how many
 exact searches and near/far fields it made (``--save``: also the robots' distances at the centres, for
-``diff A.npz B.npz`` to say where two versions' differ). Versions compared this way see the same calls,
+``diff A.npz B.npz`` to say where two versions' differ; ``--factor F``: pool blocks of F cells instead of
+the recorded size, ``--factor 1`` giving exact distances). Versions compared this way see the same calls,
 which whole missions do not once they part. The recording is a pickle of numpy arrays; read only files you made.
 """
 
