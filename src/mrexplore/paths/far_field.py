@@ -547,8 +547,9 @@ def far_fields(
             still = ~np.isfinite(d) & ~searched
             if still.any():
                 # Ragged free space round the cell joins no block of theirs within the radius. Twice the
-                # radius mostly does: late on KTH floors at 0.05 m such a centre took 3-5 ms so, against
-                # 40-68 ms for the exact search over the floor (``perf/replay_far_fields.py``).
+                # radius mostly does, at a fraction of an exact search over the floor: recorded late PLAN2
+                # calls went 142/118 -> 93/77 ms on one thread (``perf/replay_far_fields.py``,
+                # docs/results/back_wider).
                 d[still] = _back(passable, grid, cell, 2 * radius_cells, sources, fields)[still]
                 still &= ~np.isfinite(d)
             if still.any():
