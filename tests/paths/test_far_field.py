@@ -287,3 +287,32 @@ def test_the_grids_shared_exact_searches_read_what_a_fresh_search_does(seed: int
         cells = np.vstack([free[rng.choice(len(free), size=5)], [[0, 0]]])  # the last one is blocked
         want = distance_fields(g, src[None], cells)[0].at(cells)
         np.testing.assert_array_equal(grid.exact_at(src, cells), want)
+
+
+def test_a_passage_four_cells_wide_is_crossed_on_blocks_half_as_wide_not_by_exact_searches(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # A room (columns 0-29) and a hall (60-119) joined by a corridor through a thick wall, rows 19-22: every
+    # 3 x 3 block of the corridor holds a wall row (blocks start at rows 18 and 21), so pooled by 3 it is
+    # closed; blocks of 2 (rows 20-21) run through it. Robot B in the room leaves the hall cells at inf, and
+    # a cell in the corridor's middle is joined to no block of 3 within twice the radius.
+    g = np.ones((40, 120), bool)
+    g[:, 30:60] = False
+    g[19:23, 30:60] = True
+    sources = np.array([[20, 5], [20, 100]])  # B, A
+    must = np.array([[3, 115], [36, 115], [20, 118], [20, 45]])
+    grid = coarse_grid(g, 3)
+    assert grid is not None
+    alone = far_fields(g, sources, radius_cells=4, factor=3, grid=grid)
+    assert not np.isfinite(alone[0].at(must)).any() and not np.isfinite(alone[1].value(20, 45))
+    searches: list[str] = []
+    monkeypatch.setattr(type(grid), "exact_at", lambda *a: searches.append("exact"))
+    fields = far_fields(g, sources, radius_cells=4, factor=3, must_rc=must, grid=grid)
+    assert searches == []  # every pair left at inf is read on the finer blocks
+    finer = grid.finer()
+    assert finer is not None and finer.factor == 2
+    for f, src in zip(fields, sources, strict=True):
+        exact = distance_fields(g, src[None])[0].at(must)
+        got = f.at(must)
+        assert np.all(got >= exact - 1e-4)  # a real path: never shorter
+        assert np.all(got <= exact + 2 * math.sqrt(2))  # within a finer block's diagonal

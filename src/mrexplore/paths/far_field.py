@@ -9,8 +9,8 @@ planners' costs of far clusters are estimates, the ones of near clusters and eve
 The coarse grid is conservative: a block is passable only when all of its cells are, so no coarse path
 crosses a wall, however thin, and every coarse path is a real path at least as long (an estimate is never
 shorter than the true distance, up to the last block to the cell). Passages narrower than about two blocks
-are closed on it; what lies only behind one reads ``inf`` there, and the caller falls back to an exact
-search (:func:`far_fields`).
+are closed on it; what lies only behind one reads ``inf`` there, and :func:`far_fields` searches it on
+blocks half as wide, exactly where those close it too.
 """
 
 from __future__ import annotations
@@ -218,6 +218,8 @@ class CoarseGrid:
     """:meth:`tails` already computed, by cell."""
     _exact: list[tuple[_Searches, int, int]] = field(default_factory=list, repr=False, compare=False)
     """The fine grid's searches (:meth:`exact_at`), built on first use."""
+    _finer: list[CoarseGrid | None] = field(default_factory=list, repr=False, compare=False)
+    """:meth:`finer`, built on first use."""
 
     @classmethod
     def of(cls, passable: BoolGrid, factor: int) -> CoarseGrid | None:
@@ -272,6 +274,15 @@ class CoarseGrid:
         out[inside] = values[local[inside, 0], local[inside, 1]]
         return out
 
+    def finer(self) -> CoarseGrid | None:
+        """The same fine grid pooled into blocks half as wide (2 cells at the least), built once and kept;
+        None where that is no smaller block. A passage ``2 s - 1`` cells wide always holds a whole block of
+        side ``s``: blocks of 2 close no passage 3 cells wide or more, which blocks of 3 close where it is
+        under 5 and misses their alignment."""
+        if not self._finer:
+            self._finer.append(_finer_of(self.fine, self.factor))
+        return self._finer[0]
+
     def centres_rc(self, blocks: NDArray[np.integer]) -> NDArray[np.int64]:
         """The fine cell at the middle of each ``(k, 2)`` block (the cell a block's distance is taken at)."""
         return np.asarray(blocks, np.int64) * self.factor + np.array([self.r0, self.c0]) + self.factor // 2
@@ -297,8 +308,8 @@ class NearFarField:
     seed_key: NDArray[np.float32]
     """``(h, w) float32`` the starting distance of each seed block (in blocks); ``inf`` for others."""
     known: dict[tuple[int, int], float] = field(default_factory=dict)
-    """Exact distances found otherwise (:func:`far_fields` searches back from the cells the coarse grid
-    does not reach); they take precedence."""
+    """Distances found otherwise, for cells the coarse grid leaves at ``inf`` (:func:`far_fields`: joined
+    back from the cell, on blocks half as wide, or exact); they take precedence."""
 
     def _far(self, cells: NDArray[np.int64]) -> NDArray[np.float64]:
         g, f = self.grid, self.grid.factor
@@ -453,6 +464,13 @@ def _fewest_searches(pairs: NDArray[np.bool_]) -> tuple[NDArray[np.bool_], NDArr
     return seen_sources, pairs.any(axis=0) & ~seen_cells
 
 
+def _finer_of(passable: BoolGrid, factor: int) -> CoarseGrid | None:
+    """``passable`` pooled into blocks half as wide as ``factor`` (2 cells at the least); None where that
+    is no smaller block (:meth:`CoarseGrid.finer`)."""
+    side = max(2, factor // 2)
+    return CoarseGrid.of(passable, side) if side < factor else None
+
+
 def coarse_grid(passable: BoolGrid, factor: int) -> CoarseGrid | None:
     """``passable`` pooled into ``factor`` x ``factor`` blocks, for :func:`far_fields` calls on the same grid to
     share (pooling a KTH floor at 0.05 m takes about 3 ms); None where no cell is passable.
@@ -483,14 +501,16 @@ def far_fields(
     ``must_rc`` (``(k, 2) int``, e.g. cluster centres): cells every field must answer where the exact
     search does. Where the coarse grid leaves some at ``inf`` (behind a passage it closes, or a source
     behind one), the fewest sources and cells that cover every such pair are searched: a source by one
-    exact search stopped at the cells it leaves; a cell by an exact search of its own up to the radius,
+    search that reads all the cells it leaves; a cell by an exact search of its own up to the radius,
     joined to the sources' coarse fields (:func:`_back`; distances are symmetric, its exact part goes
-    through the passage; where that joins none, the same with twice the radius), and an exact search from
-    it to the sources that still leaves at ``inf`` (the other sources read the cell's distances so found).
-    Those values go into the fields' :attr:`~NearFarField.known`. ``own_rc``: per source, cells only
-    that source must answer (its current goal); where the coarse grid leaves one at ``inf``, an exact
-    search from the source stopped at them. ``grid``: :func:`coarse_grid` of the same ``passable`` and
-    ``factor``, shared between calls (built here when None).
+    through the passage; where that joins none, the same with twice the radius), and a search from it to
+    the sources that still leaves at ``inf`` (the other sources read the cell's distances so found). Such
+    a search is a near/far field on blocks half as wide (:meth:`CoarseGrid.finer`: with blocks of 2, no
+    passage 3 cells wide or more is closed), exact where that leaves cells at ``inf`` too; its values go
+    into the fields' :attr:`~NearFarField.known`. ``own_rc``: per source, cells only that source must
+    answer (its current goal); where the coarse grid leaves one at ``inf``, the same search from the
+    source. ``grid``: :func:`coarse_grid` of the same ``passable`` and ``factor``, shared between calls
+    (built here when None).
 
     Examples
     --------
@@ -521,12 +541,29 @@ def far_fields(
             return pooled.exact_at(src, cells)
         return distance_fields(passable, src[None], cells)[0].at(cells)
 
+    finer: list[CoarseGrid | None] = []
+
+    def unjoined(src: NDArray[np.int64], cells: NDArray[np.int64]) -> NDArray[np.float64]:
+        """Distances from ``src`` at ``cells`` the grid leaves at ``inf``: a near/far field of ``src`` on
+        blocks half as wide (:meth:`CoarseGrid.finer`), exact where that leaves them too. On a KTH
+        floor at 0.05 m the finer field took 20-26 ms where the exact search over the floor took 47-50,
+        its distances at most 0.24% longer (a recorded late PLAN2 call, ``perf/replay_far_fields.py``)."""
+        if not finer:
+            finer.append(pooled.finer() if pooled.fine is passable else _finer_of(passable, pooled.factor))
+        out = np.full(len(cells), np.inf)
+        if finer[0] is not None:
+            out = _one(passable, finer[0], src, radius_cells).at(cells)
+        still = ~np.isfinite(out)
+        if still.any():
+            out[still] = exact(src, cells[still])
+        return out
+
     fields = map_threads(lambda src: _one(passable, grid, src, radius_cells), list(sources))
     if must_rc is not None and len(must_rc) and len(fields):
         must = np.unique(np.asarray(must_rc, np.int64).reshape(-1, 2), axis=0)
         unread = ~np.isfinite(np.stack([f.at(must) for f in fields]))
-        # Every (source, cell) pair left at inf needs an exact search: from the source (one search, stopped
-        # at all the cells it leaves) or back from the cell (below). A source standing apart from the coarse
+        # Every (source, cell) pair left at inf needs a search of its own: from the source (one search for
+        # all the cells it leaves) or back from the cell (below). A source standing apart from the coarse
         # grid's network (its exact radius reaches no block joined to the rest) leaves most cells at inf:
         # late on a KTH floor one robot of 8 left 17-19 of 18-20 centres, each searched back alone before. As few
         # searches as cover every pair: a minimum vertex cover of the pairs (:func:`_fewest_searches`).
@@ -536,13 +573,13 @@ def far_fields(
             if own_rc is not None and i < len(own_rc):  # its own goals in the same search
                 own = np.asarray(own_rc[i], np.int64).reshape(-1, 2)
                 cells = np.vstack([cells, own[~np.isfinite(fields[i].at(own))]])
-            for cell, d in zip(cells, exact(sources[i], cells), strict=True):
+            for cell, d in zip(cells, unjoined(sources[i], cells), strict=True):
                 fields[i].known[(int(cell[0]), int(cell[1]))] = float(d)
         for cell in must[back]:
             # From the cell: exact through its passage, on along the sources' own coarse fields (no search of
             # its own, :func:`_back`); exact all the way if need be.
             key = (int(cell[0]), int(cell[1]))
-            searched = np.array([key in f.known for f in fields])  # exact already, from its source
+            searched = np.array([key in f.known for f in fields])  # found already, from its source
             d = _back(passable, grid, cell, radius_cells, sources, fields)
             still = ~np.isfinite(d) & ~searched
             if still.any():
@@ -553,7 +590,7 @@ def far_fields(
                 d[still] = _back(passable, grid, cell, 2 * radius_cells, sources, fields)[still]
                 still &= ~np.isfinite(d)
             if still.any():
-                d[still] = exact(cell, sources[still])
+                d[still] = unjoined(cell, sources[still])
             for f, v, done in zip(fields, d, searched, strict=True):
                 if not done:
                     f.known[key] = float(v)
@@ -561,7 +598,7 @@ def far_fields(
         mine = np.asarray(goals, np.int64).reshape(-1, 2)
         unseen = mine[~np.isfinite(f.at(mine))]
         if len(unseen):
-            for cell, d in zip(unseen, exact(src, unseen), strict=True):
+            for cell, d in zip(unseen, unjoined(src, unseen), strict=True):
                 f.known[(int(cell[0]), int(cell[1]))] = float(d)
     return fields
 
