@@ -545,9 +545,10 @@ def far_fields(
 
     def unjoined(src: NDArray[np.int64], cells: NDArray[np.int64]) -> NDArray[np.float64]:
         """Distances from ``src`` at ``cells`` the grid leaves at ``inf``: a near/far field of ``src`` on
-        blocks half as wide (:meth:`CoarseGrid.finer`), exact where that leaves them too. On a KTH
-        floor at 0.05 m the finer field took 20-26 ms where the exact search over the floor took 47-50,
-        its distances at most 0.24% longer (a recorded late PLAN2 call, ``perf/replay_far_fields.py``)."""
+        blocks half as wide (:meth:`CoarseGrid.finer`), exact where that leaves them too. Recorded late
+        PLAN2 calls at 0.05 m, each of which searched the floor exactly from one centre, went 173/141 ->
+        114/94 ms on one thread, the distances so found at most 0.3% longer (``perf/replay_far_fields.py``,
+        docs/results/finer_blocks)."""
         if not finer:
             finer.append(pooled.finer() if pooled.fine is passable else _finer_of(passable, pooled.factor))
         out = np.full(len(cells), np.inf)
@@ -577,7 +578,7 @@ def far_fields(
                 fields[i].known[(int(cell[0]), int(cell[1]))] = float(d)
         for cell in must[back]:
             # From the cell: exact through its passage, on along the sources' own coarse fields (no search of
-            # its own, :func:`_back`); exact all the way if need be.
+            # its own, :func:`_back`); a search of its own on finer blocks, or exact, if need be.
             key = (int(cell[0]), int(cell[1]))
             searched = np.array([key in f.known for f in fields])  # found already, from its source
             d = _back(passable, grid, cell, radius_cells, sources, fields)
