@@ -278,7 +278,9 @@ def test_hostile_policy_files(tmp_path, capsys) -> None:
     assert "does not fit this network" in _err(capsys)
 
 
-@pytest.mark.parametrize("script", ["profile_decision.py", "bench_step_and_decision.py", "bench_fields.py"])
+@pytest.mark.parametrize(
+    "script", ["profile_decision.py", "bench_step_and_decision.py", "bench_fields.py", "convoy.py"]
+)
 def test_perf_scripts_give_one_line_on_bad_input(script: str) -> None:
     perf = Path(__file__).resolve().parents[1] / "perf"
     out = subprocess.run(
