@@ -209,3 +209,38 @@ def test_a_room_seen_through_a_door_keeps_one_seed_and_a_shut_door_splits_them(m
     expected = component_seeds(grid.closed, grid.codes, (2, 2), grid.n_free).tolist()
     assert expected == [2 * 9 + 2, 2 * 9 + 6]  # the other room's first interior cell
     assert grid.seeds((2, 2), window).tolist() == expected and len(fills) == 2
+
+
+def test_pieces_kept_where_only_the_robots_piece_grows(monkeypatch: MonkeyPatch) -> None:
+    # Walls everywhere but three 3 x 3 rooms: A (the robot's, columns 1-3), B (5-7) behind a door (2, 4),
+    # and C (11-13), shut off by the wall at column 10 until the hole (2, 10) is seen. Free space is in
+    # pieces from the start (A and C), so seeds come from whole fills until the pieces are labelled; then
+    # B, seen through the door, joins the robot's piece and no fill runs; the hole joins C to B, and the
+    # whole fill runs again.
+    import mrexplore.preprocessing.onboard as onboard
+
+    fills: list[str] = []
+    plain, labelled = onboard.pick_seeds, onboard.pick_seeds_labelled
+    monkeypatch.setattr(onboard, "pick_seeds", lambda *a: fills.append("plain") or plain(*a))
+    monkeypatch.setattr(onboard, "pick_seeds_labelled", lambda *a: fills.append("labelled") or labelled(*a))
+    wall = np.ones((5, 15), bool)
+    wall[1:4, 1:4] = wall[1:4, 5:8] = wall[1:4, 11:14] = wall[2, 4] = False
+    belief = Belief.empty(wall.shape)
+    belief.log_odds[:] = np.where(wall, 2.0, -2.0).astype(np.float32)
+    grid = OnBoardGrid(wall.shape, 1, SENSOR)
+    window = (slice(0, 5), slice(0, 15))
+
+    def see(r0: int, r1: int, c0: int, c1: int) -> list[int]:
+        belief.observed[r0:r1, c0:c1] = True
+        belief.note_window((r0, r1, c0, c1))
+        grid.update(belief)
+        expected = component_seeds(grid.closed, grid.codes, (2, 2), grid.n_free).tolist()
+        assert grid.seeds((2, 2), window).tolist() == expected
+        return expected
+
+    assert see(0, 5, 0, 4) + see(0, 5, 10, 15) == [2 * 15 + 2, 2 * 15 + 2, 2 * 15 + 12]  # A, then A and C
+    assert see(0, 5, 0, 4) == [2 * 15 + 2, 2 * 15 + 12] and fills == ["plain", "plain", "labelled"]
+    assert see(0, 5, 4, 9) == [2 * 15 + 2, 2 * 15 + 12]  # B joins A: C's seed is kept, no fill
+    assert fills == ["plain", "plain", "labelled"]
+    belief.log_odds[2, 8:11] = -2.0  # a way from B to C, seen
+    assert see(2, 3, 8, 11) == [2 * 15 + 2] and fills[-1] == "labelled"  # one piece again

@@ -11,6 +11,8 @@ import numpy as np
 __all__ = [
     "scanline_fill",
     "pick_seeds",
+    "pick_seeds_labelled",
+    "joined_to_label",
     "coded_cells",
     "neighbour_codes_kernel",
     "mark_coded_cells",
@@ -29,9 +31,12 @@ _UP_MASK, _DOWN_MASK, _LEFT_MASK, _RIGHT_MASK = 0x11, 0x22, 0x44, 0x88
 
 
 @nb.njit(cache=True, nogil=True)
-def scanline_fill(codes: np.ndarray, seeds: np.ndarray, filled: np.ndarray) -> int:  # pragma: no cover - numba
+def scanline_fill(
+    codes: np.ndarray, seeds: np.ndarray, filled: np.ndarray, mark: int = 1
+) -> int:  # pragma: no cover - numba
     """Scan-line flood fill into ``filled`` from ``seeds`` (row-major indices): a move out of a cell is allowed
-    towards every side its neighbour code does not flag. Returns the number of cells it filled.
+    towards every side its neighbour code does not flag. Returns the number of cells it filled. ``filled``
+    may be an integer grid (0: not filled), whose filled cells are set to ``mark`` (a component's label).
 
     The stack is a typed list of cells: an array stack that grew by reallocation (an array variable
     reassigned in the loop) ran 8x slower on the same fills, apparently because numba then left the inner
@@ -52,7 +57,7 @@ def scanline_fill(codes: np.ndarray, seeds: np.ndarray, filled: np.ndarray) -> i
         while hi < W - 1 and not filled[r, hi + 1] and (codes[r, hi] & _RIGHT_MASK) == 0:
             hi += 1
         for x in range(lo, hi + 1):
-            filled[r, x] = True
+            filled[r, x] = mark
         count += hi - lo + 1
         for k in range(2):
             rr = r - 1 if k == 0 else r + 1
@@ -96,6 +101,91 @@ def pick_seeds(
     for k in range(len(out)):
         seeds[k] = out[k]
     return seeds
+
+
+@nb.njit(cache=True)
+def pick_seeds_labelled(
+    codes: np.ndarray, state: np.ndarray, position: int, n_free: int, reached: np.ndarray, labels: np.ndarray
+) -> np.ndarray:  # pragma: no cover - numba
+    """:func:`pick_seeds`, the same seeds in the same order, labelling every 4-connected free component in
+    ``labels`` (``int32``, all 0 on entry): 1 for the robot's (where its cell is free), 2, 3, ... for the
+    seeded ones in the order of their seeds, then the components of boundary cells only (no seed)."""
+    H, W = codes.shape
+    out = []
+    reached[0] = -1
+    k = 1
+    if 0 <= position < H * W and state[position // W, position % W] == _FREE:
+        out.append(position)
+        reached[0] = scanline_fill(codes, np.array([position], dtype=np.int64), labels, k)
+        if reached[0] == n_free:
+            return np.array([position], dtype=np.int64)
+    for r in range(H):
+        for c in range(W):
+            if state[r, c] == _FREE and codes[r, c] == 0 and labels[r, c] == 0:
+                k += 1
+                out.append(r * W + c)
+                scanline_fill(codes, np.array([r * W + c], dtype=np.int64), labels, k)
+    for r in range(H):
+        for c in range(W):
+            if state[r, c] == _FREE and labels[r, c] == 0:
+                k += 1
+                scanline_fill(codes, np.array([r * W + c], dtype=np.int64), labels, k)
+    seeds = np.empty(len(out), dtype=np.int64)
+    for j in range(len(out)):
+        seeds[j] = out[j]
+    return seeds
+
+
+@nb.njit(cache=True)
+def joined_to_label(
+    state: np.ndarray, labels: np.ndarray, box: tuple[int, int, int, int], label: int
+) -> bool:  # pragma: no cover - numba
+    """Whether every free cell of ``box`` that ``labels`` leaves at 0 (free since the labels were made) is
+    joined, by 4-connected such cells inside the box, to cells of component ``label`` and of no other; if
+    so, those cells get ``label`` (if not, ``labels`` is left part-written). Free space that lost no cell
+    since its components were labelled keeps every other component as it was exactly when this holds
+    (:meth:`~mrexplore.preprocessing.onboard.OnBoardGrid.seeds`): a cell new to a component is 4-joined
+    to it, and a path from it leaving the box meets an old, labelled cell first."""
+    H, W = state.shape
+    r0, r1, c0, c1 = box
+    h, w = r1 - r0, c1 - c0
+    stack = np.empty(h * w, dtype=np.int64)
+    piece = np.empty(h * w, dtype=np.int64)
+    seen = np.zeros((h, w), dtype=np.bool_)
+    for r in range(r0, r1):
+        for c in range(c0, c1):
+            if state[r, c] != _FREE or labels[r, c] != 0 or seen[r - r0, c - c0]:
+                continue
+            # One piece of new free cells inside the box, and the labels it touches.
+            seen[r - r0, c - c0] = True
+            stack[0] = (r - r0) * w + (c - c0)
+            n, m, touches = 1, 0, False
+            while n > 0:
+                n -= 1
+                q = stack[n]
+                piece[m] = q
+                m += 1
+                qr, qc = q // w + r0, q % w + c0
+                for d in range(4):
+                    rr, cc = qr + _DR[d], qc + _DC[d]
+                    if rr < 0 or rr >= H or cc < 0 or cc >= W or state[rr, cc] != _FREE:
+                        continue
+                    other = labels[rr, cc]
+                    if other != 0:
+                        if other != label:
+                            return False
+                        touches = True
+                    elif not (r0 <= rr < r1 and c0 <= cc < c1):
+                        return False  # an unlabelled free cell outside the box: the box missed a change
+                    elif not seen[rr - r0, cc - c0]:
+                        seen[rr - r0, cc - c0] = True
+                        stack[n] = (rr - r0) * w + (cc - c0)
+                        n += 1
+            if not touches:
+                return False
+            for j in range(m):
+                labels[piece[j] // w + r0, piece[j] % w + c0] = label
+    return True
 
 
 @nb.njit(cache=True)
