@@ -211,12 +211,12 @@ def test_a_room_seen_through_a_door_keeps_one_seed_and_a_shut_door_splits_them(m
     assert grid.seeds((2, 2), window).tolist() == expected and len(fills) == 2
 
 
-def test_pieces_kept_where_only_the_robots_piece_grows(monkeypatch: MonkeyPatch) -> None:
+def test_pieces_kept_where_only_the_robots_piece_changes(monkeypatch: MonkeyPatch) -> None:
     # Walls everywhere but three 3 x 3 rooms: A (the robot's, columns 1-3), B (5-7) behind a door (2, 4),
-    # and C (11-13), shut off by the wall at column 10 until the hole (2, 10) is seen. Free space is in
+    # and C (11-13), walled off by columns 8-10 until a way through them (row 2) is seen. Free space is in
     # pieces from the start (A and C), so seeds come from whole fills until the pieces are labelled; then
-    # B, seen through the door, joins the robot's piece and no fill runs; the hole joins C to B, and the
-    # whole fill runs again.
+    # B, seen through the door, joins the robot's piece and no fill runs, nor when a cell of B is seen
+    # occupied; the way joins C to B, and the whole fill runs again.
     import mrexplore.preprocessing.onboard as onboard
 
     fills: list[str] = []
@@ -241,6 +241,8 @@ def test_pieces_kept_where_only_the_robots_piece_grows(monkeypatch: MonkeyPatch)
     assert see(0, 5, 0, 4) + see(0, 5, 10, 15) == [2 * 15 + 2, 2 * 15 + 2, 2 * 15 + 12]  # A, then A and C
     assert see(0, 5, 0, 4) == [2 * 15 + 2, 2 * 15 + 12] and fills == ["plain", "plain", "labelled"]
     assert see(0, 5, 4, 9) == [2 * 15 + 2, 2 * 15 + 12]  # B joins A: C's seed is kept, no fill
+    belief.log_odds[1, 5] = 2.0  # a corner of B seen occupied: the robot's piece loses a cell, stays whole
+    assert see(1, 2, 5, 6) == [2 * 15 + 2, 2 * 15 + 12]
     assert fills == ["plain", "plain", "labelled"]
     belief.log_odds[2, 8:11] = -2.0  # a way from B to C, seen
     assert see(2, 3, 8, 11) == [2 * 15 + 2] and fills[-1] == "labelled"  # one piece again

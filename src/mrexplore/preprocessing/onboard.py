@@ -18,7 +18,13 @@ from numpy.typing import NDArray
 from mrexplore.boxes import Box, box_union, grown_slices
 from mrexplore.config import SensorConfig
 from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
-from mrexplore.preprocessing.scanline_fill import joined_in_box, joined_to_label, pick_seeds, pick_seeds_labelled
+from mrexplore.preprocessing.scanline_fill import (
+    joined_in_box,
+    joined_to_label,
+    kept_in_label,
+    pick_seeds,
+    pick_seeds_labelled,
+)
 from mrexplore.preprocessing.sparse_map import neighbour_codes
 from mrexplore.sim.belief import Belief, classify
 from mrexplore.types import CellState, GridRC, StateGrid
@@ -129,7 +135,10 @@ class OnBoardGrid:
         building filled hundreds of pieces a round), each piece keeps a label: the other pieces and their
         seeds stay as they were exactly when every changed free cell joins, inside the box, the robot's piece
         and no other (:func:`~mrexplore.preprocessing.scanline_fill.joined_to_label`, which labels them), and
-        the robot still stands in that piece. Otherwise the whole fill, as before."""
+        the robot still stands in that piece. Where free cells were lost too, the same holds when every cell
+        of the robot's piece or new in the box and the ring round it is joined to all the others there and
+        to no other piece, and no other piece lost a cell
+        (:func:`~mrexplore.preprocessing.scanline_fill.kept_in_label`). Otherwise the whole fill, as before."""
         r, c = int(position_rc[0]), int(position_rc[1])
         r0, c0 = window[0].start, window[1].start
         w = window[1].stop - c0
@@ -142,9 +151,12 @@ class OnBoardGrid:
             self._others = None  # the labels were not kept up
             return np.array([robot], dtype=np.int64)
         labels, others = self._labels, self._others
-        if labels is not None and others is not None and on_free and not lost:
-            grown = box is None or joined_to_label(self.closed, labels, box, 1)  # labels the robot's new cells
-            if grown and labels[r, c] == 1:
+        if labels is not None and others is not None and on_free:
+            if box is None:
+                kept = not lost
+            else:  # labels the robot's new cells (and unlabels its lost ones)
+                kept = (kept_in_label if lost else joined_to_label)(self.closed, labels, box, 1)
+            if kept and labels[r, c] == 1:
                 return np.sort(np.concatenate([[robot], (others[:, 0] - r0) * w + (others[:, 1] - c0)]))
         reached = np.zeros(1, dtype=np.int64)
         position = robot if here else -1

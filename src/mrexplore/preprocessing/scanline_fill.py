@@ -13,6 +13,7 @@ __all__ = [
     "pick_seeds",
     "pick_seeds_labelled",
     "joined_to_label",
+    "kept_in_label",
     "coded_cells",
     "neighbour_codes_kernel",
     "mark_coded_cells",
@@ -185,6 +186,70 @@ def joined_to_label(
                 return False
             for j in range(m):
                 labels[piece[j] // w + r0, piece[j] % w + c0] = label
+    return True
+
+
+@nb.njit(cache=True)
+def kept_in_label(
+    state: np.ndarray, labels: np.ndarray, box: tuple[int, int, int, int], label: int
+) -> bool:  # pragma: no cover - numba
+    """:func:`joined_to_label` where free cells of ``box`` may also have stopped being free: whether every
+    cell of component ``label`` or free since the labels were made, in ``box`` and the ring of cells round
+    it, is still free and joined to all the others by 4-connected such cells there, touching no other
+    component, and no cell that stopped being free belonged to another. If so, those cells get ``label``
+    and the lost ones 0 (if not, ``labels`` is left unchanged). Then no component split, merged or lost an
+    interior cell but ``label``'s, which gained and lost cells; a component that reaches round the ring
+    outside reads as split (a whole fill, not a wrong seed)."""
+    H, W = state.shape
+    r0, r1 = max(0, box[0] - 1), min(H, box[1] + 1)
+    c0, c1 = max(0, box[2] - 1), min(W, box[3] + 1)
+    h, w = r1 - r0, c1 - c0
+    inner = (box[0], box[1], box[2], box[3])
+    mine = np.zeros((h, w), dtype=np.bool_)
+    total = 0
+    first = -1
+    for r in range(r0, r1):
+        for c in range(c0, c1):
+            old = labels[r, c]
+            inside = inner[0] <= r < inner[1] and inner[2] <= c < inner[3]
+            if state[r, c] == _FREE:
+                if old == label or (old == 0 and inside):
+                    mine[r - r0, c - c0] = True
+                    total += 1
+                    if first < 0:
+                        first = (r - r0) * w + (c - c0)
+                elif old == 0:
+                    return False  # free, unlabelled, outside the box: the box missed a change
+            elif old != 0 and old != label:
+                return False  # another component lost a cell
+    if first < 0:
+        return False
+    stack = np.empty(h * w, dtype=np.int64)
+    seen = np.zeros((h, w), dtype=np.bool_)
+    seen[first // w, first % w] = True
+    stack[0] = first
+    n, reached = 1, 0
+    while n > 0:
+        n -= 1
+        q = stack[n]
+        reached += 1
+        qr, qc = q // w, q % w
+        for d in range(4):
+            rr, cc = qr + _DR[d], qc + _DC[d]
+            if rr < 0 or rr >= h or cc < 0 or cc >= w:
+                continue
+            if mine[rr, cc]:
+                if not seen[rr, cc]:
+                    seen[rr, cc] = True
+                    stack[n] = rr * w + cc
+                    n += 1
+            elif state[rr + r0, cc + c0] == _FREE:
+                return False  # joined to another component
+    if reached != total:
+        return False
+    for r in range(inner[0], inner[1]):
+        for c in range(inner[2], inner[3]):
+            labels[r, c] = label if mine[r - r0, c - c0] else (labels[r, c] if state[r, c] == _FREE else 0)
     return True
 
 
