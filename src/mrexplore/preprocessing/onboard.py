@@ -135,10 +135,10 @@ class OnBoardGrid:
         building filled hundreds of pieces a round), each piece keeps a label: the other pieces and their
         seeds stay as they were exactly when every changed free cell joins, inside the box, the robot's piece
         and no other (:func:`~mrexplore.preprocessing.scanline_fill.joined_to_label`, which labels them), and
-        the robot still stands in that piece. Where free cells were lost too, the same holds when every cell
-        of the robot's piece or new in the box and the ring round it is joined to all the others there and
-        to no other piece, and no other piece lost a cell
-        (:func:`~mrexplore.preprocessing.scanline_fill.kept_in_label`). Otherwise the whole fill, as before."""
+        the robot still stands in that piece. Where free cells were lost too, the same holds when all of them
+        were the robot's piece's and their free neighbours are still joined to one another by it within
+        ``_LOST_REACH`` cells (:func:`~mrexplore.preprocessing.scanline_fill.kept_in_label`). Otherwise the
+        whole fill, as before."""
         r, c = int(position_rc[0]), int(position_rc[1])
         r0, c0 = window[0].start, window[1].start
         w = window[1].stop - c0
@@ -154,8 +154,10 @@ class OnBoardGrid:
         if labels is not None and others is not None and on_free:
             if box is None:
                 kept = not lost
-            else:  # labels the robot's new cells (and unlabels its lost ones)
-                kept = (kept_in_label if lost else joined_to_label)(self.closed, labels, box, 1)
+            elif lost:  # labels the robot's new cells and unlabels its lost ones
+                kept = kept_in_label(self.closed, labels, box, 1, _LOST_REACH)
+            else:  # labels the robot's new cells
+                kept = joined_to_label(self.closed, labels, box, 1)
             if kept and labels[r, c] == 1:
                 return np.sort(np.concatenate([[robot], (others[:, 0] - r0) * w + (others[:, 1] - c0)]))
         reached = np.zeros(1, dtype=np.int64)
@@ -174,6 +176,11 @@ class OnBoardGrid:
         elif labels is None and not self._one_piece:
             self._labels = np.zeros(self.closed.shape, dtype=np.int32)  # pieces: label them from the next fill
         return np.sort(found)
+
+
+_LOST_REACH = 8
+"""How far round the cells a robot's piece lost :meth:`OnBoardGrid.seeds` looks for the ways round them
+(cells); a piece joined only farther round reads as split, and the whole fill runs."""
 
 
 def _grown(box: Box, margin: int, shape: tuple[int, int]) -> Box:

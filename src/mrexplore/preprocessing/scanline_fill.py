@@ -191,65 +191,68 @@ def joined_to_label(
 
 @nb.njit(cache=True)
 def kept_in_label(
-    state: np.ndarray, labels: np.ndarray, box: tuple[int, int, int, int], label: int
+    state: np.ndarray, labels: np.ndarray, box: tuple[int, int, int, int], label: int, reach: int
 ) -> bool:  # pragma: no cover - numba
     """:func:`joined_to_label` where free cells of ``box`` may also have stopped being free: whether every
-    cell of component ``label`` or free since the labels were made, in ``box`` and the ring of cells round
-    it, is still free and joined to all the others by 4-connected such cells there, touching no other
-    component, and no cell that stopped being free belonged to another. If so, those cells get ``label``
-    and the lost ones 0 (if not, ``labels`` is left unchanged). Then no component split, merged or lost an
-    interior cell but ``label``'s, which gained and lost cells; a component that reaches round the ring
-    outside reads as split (a whole fill, not a wrong seed)."""
+    cell that did belonged to component ``label``, every new free cell is joined to it (as there), and
+    the free 4-neighbours of the lost cells are still joined to one another by its cells within ``reach``
+    cells of the lost ones. If so, the new cells get ``label`` and the lost ones 0; if not, ``labels`` may
+    be left part-written. Then no other component changed, and ``label``'s is still one: a path of it that
+    went through lost cells goes round them from one of their neighbours to another."""
     H, W = state.shape
-    r0, r1 = max(0, box[0] - 1), min(H, box[1] + 1)
-    c0, c1 = max(0, box[2] - 1), min(W, box[3] + 1)
-    h, w = r1 - r0, c1 - c0
-    inner = (box[0], box[1], box[2], box[3])
-    mine = np.zeros((h, w), dtype=np.bool_)
-    total = 0
-    first = -1
+    r0, r1, c0, c1 = box
+    lost_r = np.empty((r1 - r0) * (c1 - c0), dtype=np.int64)
+    lost_c = np.empty((r1 - r0) * (c1 - c0), dtype=np.int64)
+    n_lost = 0
     for r in range(r0, r1):
         for c in range(c0, c1):
-            old = labels[r, c]
-            inside = inner[0] <= r < inner[1] and inner[2] <= c < inner[3]
-            if state[r, c] == _FREE:
-                if old == label or (old == 0 and inside):
-                    mine[r - r0, c - c0] = True
-                    total += 1
-                    if first < 0:
-                        first = (r - r0) * w + (c - c0)
-                elif old == 0:
-                    return False  # free, unlabelled, outside the box: the box missed a change
-            elif old != 0 and old != label:
-                return False  # another component lost a cell
-    if first < 0:
+            if state[r, c] != _FREE and labels[r, c] != 0:
+                if labels[r, c] != label:
+                    return False  # another component lost a cell
+                lost_r[n_lost] = r
+                lost_c[n_lost] = c
+                n_lost += 1
+    if not joined_to_label(state, labels, box, label):
         return False
-    stack = np.empty(h * w, dtype=np.int64)
-    seen = np.zeros((h, w), dtype=np.bool_)
-    seen[first // w, first % w] = True
-    stack[0] = first
-    n, reached = 1, 0
-    while n > 0:
-        n -= 1
-        q = stack[n]
-        reached += 1
-        qr, qc = q // w, q % w
+    if n_lost == 0:
+        return True
+    # The lost cells' free neighbours, joined within the box round the lost cells grown by ``reach``.
+    a0, a1 = max(0, lost_r[:n_lost].min() - reach), min(H, lost_r[:n_lost].max() + reach + 1)
+    b0, b1 = max(0, lost_c[:n_lost].min() - reach), min(W, lost_c[:n_lost].max() + reach + 1)
+    h, w = a1 - a0, b1 - b0
+    target = np.zeros((h, w), dtype=np.bool_)
+    n_target, first = 0, -1
+    for k in range(n_lost):
         for d in range(4):
-            rr, cc = qr + _DR[d], qc + _DC[d]
-            if rr < 0 or rr >= h or cc < 0 or cc >= w:
-                continue
-            if mine[rr, cc]:
-                if not seen[rr, cc]:
+            rr, cc = lost_r[k] + _DR[d], lost_c[k] + _DC[d]
+            if 0 <= rr < H and 0 <= cc < W and state[rr, cc] == _FREE and not target[rr - a0, cc - b0]:
+                if labels[rr, cc] != label:
+                    return False
+                target[rr - a0, cc - b0] = True
+                n_target += 1
+                first = (rr - a0) * w + (cc - b0)
+    if n_target > 1:
+        seen = np.zeros((h, w), dtype=np.bool_)
+        stack = np.empty(h * w, dtype=np.int64)
+        seen[first // w, first % w] = True
+        stack[0] = first
+        n, found = 1, 0
+        while n > 0 and found < n_target:
+            n -= 1
+            q = stack[n]
+            qr, qc = q // w, q % w
+            found += target[qr, qc]
+            for d in range(4):
+                rr, cc = qr + _DR[d], qc + _DC[d]
+                inside = 0 <= rr < h and 0 <= cc < w and not seen[rr, cc]
+                if inside and state[rr + a0, cc + b0] == _FREE and labels[rr + a0, cc + b0] == label:
                     seen[rr, cc] = True
                     stack[n] = rr * w + cc
                     n += 1
-            elif state[rr + r0, cc + c0] == _FREE:
-                return False  # joined to another component
-    if reached != total:
-        return False
-    for r in range(inner[0], inner[1]):
-        for c in range(inner[2], inner[3]):
-            labels[r, c] = label if mine[r - r0, c - c0] else (labels[r, c] if state[r, c] == _FREE else 0)
+        if found < n_target:
+            return False  # perhaps split: the whole fill decides
+    for k in range(n_lost):
+        labels[lost_r[k], lost_c[k]] = 0
     return True
 
 
