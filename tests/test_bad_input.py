@@ -279,7 +279,7 @@ def test_hostile_policy_files(tmp_path, capsys) -> None:
 
 
 @pytest.mark.parametrize(
-    "script", ["profile_decision.py", "bench_step_and_decision.py", "bench_fields.py", "convoy.py"]
+    "script", ["profile_decision.py", "bench_step_and_decision.py", "bench_fields.py", "convoy.py", "onboard_parts.py"]
 )
 def test_perf_scripts_give_one_line_on_bad_input(script: str) -> None:
     perf = Path(__file__).resolve().parents[1] / "perf"
