@@ -132,7 +132,7 @@ class OnBoardGrid:
         outside the box, lies inside it.
 
         Where free space is in pieces (clutter: on Willow Garage at 0.05 m a robot that had seen most of the
-        building filled hundreds of pieces a round), each piece keeps a label: the other pieces and their
+        building filled many pieces a round), each piece keeps a label: the other pieces and their
         seeds stay as they were exactly when every changed free cell joins, inside the box, the robot's piece
         and no other (:func:`~mrexplore.preprocessing.scanline_fill.joined_to_label`, which labels them), and
         the robot still stands in that piece. Where free cells were lost too, the same holds when all of them
