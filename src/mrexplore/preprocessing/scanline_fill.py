@@ -75,6 +75,46 @@ def scanline_fill(
 
 
 @nb.njit(cache=True)
+def _seeds_into(
+    codes: np.ndarray,
+    state: np.ndarray,
+    position: int,
+    n_free: int,
+    reached: np.ndarray,
+    filled: np.ndarray,
+    every: bool,
+) -> np.ndarray:  # pragma: no cover - numba
+    """:func:`pick_seeds` filling ``filled`` (all 0 on entry) with each component's number, 1 for the
+    robot's, 2, 3, ... in the order of the seeds; with ``every``, the components of boundary cells only
+    too, after them (:func:`pick_seeds_labelled`)."""
+    H, W = codes.shape
+    out = []
+    reached[0] = -1
+    k = 1
+    if 0 <= position < H * W and state[position // W, position % W] == _FREE:
+        out.append(position)
+        reached[0] = scanline_fill(codes, np.array([position], dtype=np.int64), filled, k)
+        if reached[0] == n_free:
+            return np.array([position], dtype=np.int64)
+    for r in range(H):
+        for c in range(W):
+            if state[r, c] == _FREE and codes[r, c] == 0 and filled[r, c] == 0:
+                k += 1
+                out.append(r * W + c)
+                scanline_fill(codes, np.array([r * W + c], dtype=np.int64), filled, k)
+    if every:
+        for r in range(H):
+            for c in range(W):
+                if state[r, c] == _FREE and filled[r, c] == 0:
+                    k += 1
+                    scanline_fill(codes, np.array([r * W + c], dtype=np.int64), filled, k)
+    seeds = np.empty(len(out), dtype=np.int64)
+    for j in range(len(out)):
+        seeds[j] = out[j]
+    return seeds
+
+
+@nb.njit(cache=True)
 def pick_seeds(
     codes: np.ndarray, state: np.ndarray, position: int, n_free: int, reached: np.ndarray
 ) -> np.ndarray:  # pragma: no cover - numba
@@ -84,24 +124,8 @@ def pick_seeds(
     a component made only of them needs no seed. ``n_free``: the free cells of ``state`` where the caller
     knows them (-1: not known); when the robot's own fill reaches that many, no other component is sought.
     ``reached[0]`` is set to the cells the robot's own fill reached (-1: its cell is not free)."""
-    H, W = codes.shape
-    filled = np.zeros((H, W), dtype=np.bool_)
-    out = []
-    reached[0] = -1
-    if 0 <= position < H * W and state[position // W, position % W] == _FREE:
-        out.append(position)
-        reached[0] = scanline_fill(codes, np.array([position], dtype=np.int64), filled)
-        if reached[0] == n_free:
-            return np.array([position], dtype=np.int64)
-    for r in range(H):
-        for c in range(W):
-            if state[r, c] == _FREE and codes[r, c] == 0 and not filled[r, c]:
-                out.append(r * W + c)
-                scanline_fill(codes, np.array([r * W + c], dtype=np.int64), filled)
-    seeds = np.empty(len(out), dtype=np.int64)
-    for k in range(len(out)):
-        seeds[k] = out[k]
-    return seeds
+    filled = np.zeros(codes.shape, dtype=np.bool_)
+    return _seeds_into(codes, state, position, n_free, reached, filled, False)
 
 
 @nb.njit(cache=True)
@@ -111,30 +135,7 @@ def pick_seeds_labelled(
     """:func:`pick_seeds`, the same seeds in the same order, labelling every 4-connected free component in
     ``labels`` (``int32``, all 0 on entry): 1 for the robot's (where its cell is free), 2, 3, ... for the
     seeded ones in the order of their seeds, then the components of boundary cells only (no seed)."""
-    H, W = codes.shape
-    out = []
-    reached[0] = -1
-    k = 1
-    if 0 <= position < H * W and state[position // W, position % W] == _FREE:
-        out.append(position)
-        reached[0] = scanline_fill(codes, np.array([position], dtype=np.int64), labels, k)
-        if reached[0] == n_free:
-            return np.array([position], dtype=np.int64)
-    for r in range(H):
-        for c in range(W):
-            if state[r, c] == _FREE and codes[r, c] == 0 and labels[r, c] == 0:
-                k += 1
-                out.append(r * W + c)
-                scanline_fill(codes, np.array([r * W + c], dtype=np.int64), labels, k)
-    for r in range(H):
-        for c in range(W):
-            if state[r, c] == _FREE and labels[r, c] == 0:
-                k += 1
-                scanline_fill(codes, np.array([r * W + c], dtype=np.int64), labels, k)
-    seeds = np.empty(len(out), dtype=np.int64)
-    for j in range(len(out)):
-        seeds[j] = out[j]
-    return seeds
+    return _seeds_into(codes, state, position, n_free, reached, labels, True)
 
 
 @nb.njit(cache=True)
