@@ -12,13 +12,13 @@ and maximum in ms per robot and round, and how the seeds came: the one-piece sho
 from __future__ import annotations
 
 import argparse
-import time
 from collections import Counter, defaultdict
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from decision_split import timed
 
 import mrexplore.preprocessing.onboard as onboard
 import mrexplore.preprocessing.transmission as transmission
@@ -44,17 +44,8 @@ def main() -> int:
     spent: dict[str, list[float]] = defaultdict(list)
     how: Counter[str] = Counter()
 
-    def timed(owner: Any, name: str, label: str) -> None:
-        fn = getattr(owner, name)
-
-        def wrapper(*a: Any, **k: Any) -> Any:
-            t = time.perf_counter()
-            try:
-                return fn(*a, **k)
-            finally:
-                spent[label].append(1e3 * (time.perf_counter() - t))
-
-        setattr(owner, name, wrapper)
+    def timed_as(owner: Any, name: str, label: str) -> None:
+        setattr(owner, name, timed(getattr(owner, name), spent[label]))
 
     def counted(name: str, outcome: Callable[[Any], str]) -> None:
         fn = getattr(onboard, name, None)
@@ -73,10 +64,10 @@ def main() -> int:
     counted("kept_in_label", lambda v: "pieces kept, cells lost" if v else "pieces: lost cells not kept")
     counted("pick_seeds", lambda v: "whole fill")
     counted("pick_seeds_labelled", lambda v: "whole fill, labelled")
-    timed(onboard.OnBoardGrid, "update", "grid update")
-    timed(onboard.OnBoardGrid, "seeds", "seeds")
-    timed(transmission, "coded_frontier_map", "message")
-    timed(transmission.RobotSender, "_both", "encoding (full and delta)")
+    timed_as(onboard.OnBoardGrid, "update", "grid update")
+    timed_as(onboard.OnBoardGrid, "seeds", "seeds")
+    timed_as(transmission, "coded_frontier_map", "message")
+    timed_as(transmission.RobotSender, "_both", "encoding (full and delta)")
     first = len(m.onboard_ms)
     for _ in range(args.rounds):
         if not m.advance():
@@ -86,7 +77,7 @@ def main() -> int:
     who = f"{truth.name}, {args.strategy}, {args.robots} robots"
     print(f"{who}: steps {args.start}-{m.steps}, {len(work)} robot rounds")
     print(f"{'part':28s} {'median':>8s} {'p95':>8s} {'max':>8s}")
-    parts = {"on board, all": list(work), **spent}
+    parts = {"on board, all": list(work), **{k: [1e3 * t for t in v] for k, v in spent.items()}}
     for label, ms in parts.items():
         a = np.asarray(ms)
         print(f"{label:28s} {np.median(a):8.2f} {np.percentile(a, 95):8.2f} {a.max():8.2f}")
