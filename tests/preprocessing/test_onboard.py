@@ -104,7 +104,7 @@ def test_onboard_messages_equal_those_of_the_whole_closed_grid(seed: int) -> Non
         pos = (int(rng.integers(r0, r1)), int(rng.integers(c0, c1)))
         own = classify(belief.log_odds, belief.observed, SENSOR)
         expected = whole.send(close_unknown_holes(own, size), rnd, pos)
-        assert onboard.send_onboard(grid, rnd, pos, window) == expected
+        assert onboard.send_onboard(grid, rnd, pos, window).both() == expected
         assert onboard.onboard_grid_delta_bytes(grid) == whole.grid_delta_bytes(own, everywhere)
         if rng.random() < 0.7:  # acknowledged
             whole.acknowledged(decode(expected[1]))

@@ -457,3 +457,45 @@ def test_a_robot_that_forgets_free_space_reaching_the_grid_edge_is_rebuilt_whole
     )
     assert np.array_equal(kept, scratch)
     assert np.array_equal(kept[:, :7] == U, np.ones((5, 7), bool))
+
+
+def test_a_short_delta_is_sent_without_encoding_the_whole_map(monkeypatch: pytest.MonkeyPatch) -> None:
+    # Round 0 has no acknowledged base: the whole map goes. Round 1 changes one cell of a cluttered hall,
+    # so its delta (a header and a few cells) is under half of round 0's whole map (hundreds of boundary
+    # cells) and goes without this round's whole map being encoded: the one encode call is the delta's.
+    # The whole map is encoded when asked for, for the accounting.
+    import mrexplore.preprocessing.transmission as transmission
+
+    encoded: list[bool] = []
+    monkeypatch.setattr(transmission, "encode", lambda m: encoded.append(m.is_delta) or encode(m))
+    seen = np.full((40, 60), O, np.uint8)
+    seen[1:-1, 1:-1] = np.where(np.random.default_rng(0).random((38, 58)) < 0.1, O, F)
+    seen[1:-1, -1] = U
+    seen[20, 30] = F
+    sender = RobotSender(0, seen.shape)
+    first = sender.outgoing(seen, 0, (20, 30))
+    assert first.delta is None and first.incremental() == first.full_bytes() and encoded == [False]
+    sender.acknowledged(decode(first.incremental()))
+    seen[20, 31] = O
+    encoded.clear()
+    second = sender.outgoing(seen, 1, (20, 30))
+    delta = decode(second.incremental())
+    assert encoded == [True]
+    assert delta.is_delta and delta.base_round == 0 and 2 * len(second.incremental()) < len(first.full_bytes())
+    assert second.full_bytes() == encode(sparse_frontier_map(seen, 0, 1, (20, 30)))
+    assert encoded == [True, False]
+
+
+def test_a_long_delta_is_weighed_against_the_whole_map() -> None:
+    # After an acknowledged round with a single free cell, the next round sees the whole map: the delta
+    # lists every boundary cell, as the whole map does, and the two are encoded and compared. The shorter
+    # goes, and both round trips rebuild the same grid.
+    full_map = state_grid(ROOMS)
+    one = np.full(full_map.shape, U, np.uint8)
+    one[3, 2] = F
+    sender = RobotSender(0, full_map.shape)
+    sender.acknowledged(decode(sender.outgoing(one, 0, (3, 2)).incremental()))
+    out = sender.outgoing(full_map, 1, (3, 2))
+    assert out.delta is not None and len(out.delta.cells) >= len(out.full.cells)
+    full, incremental = out.both()
+    assert incremental == min(encode(out.delta), full, key=len)

@@ -39,7 +39,15 @@ from mrexplore.sim.belief import Belief
 from mrexplore.threads import map_threads
 from mrexplore.types import CellState, StateGrid
 
-__all__ = ["TeamLink", "LinkStatus", "RobotSender", "TransmissionTotals", "occupancy_grid_bytes", "TRANSMISSION_MODES"]
+__all__ = [
+    "TeamLink",
+    "LinkStatus",
+    "RobotSender",
+    "Outgoing",
+    "TransmissionTotals",
+    "occupancy_grid_bytes",
+    "TRANSMISSION_MODES",
+]
 
 TransmissionMode = Literal["delta", "full"]
 TRANSMISSION_MODES: tuple[TransmissionMode, ...] = ("delta", "full")
@@ -114,6 +122,53 @@ def occupancy_grid_bytes(state: StateGrid) -> tuple[int, int]:
     return HEADER.size + len(data), HEADER.size + len(zlib.compress(data.data, 6))
 
 
+class Outgoing:
+    """One robot's messages of one round, each encoded only when asked for: the robot encodes the one it
+    sends, and the byte accounting the other (what the other transmission mode would have sent).
+
+    The incremental message is the delta where it is shorter than the whole map, else the whole map. A
+    delta under half the bytes of the last whole map encoded is sent without encoding this round's (the
+    whole map of a robot that has seen much is tens of kB to deflate, a few ms a round, and changes
+    little from round to round); otherwise both are encoded and the shorter goes.
+    """
+
+    def __init__(
+        self, sender: RobotSender, full: SparseFrontierMap, delta: SparseFrontierMap | None, last_full_len: int
+    ) -> None:
+        self._sender = sender
+        self.full = full
+        self.delta = delta
+        """None where the centre may not hold the delta's base: the incremental message is the whole map."""
+        self._last_full_len = last_full_len
+        self._full_bytes: bytes | None = None
+        self._incremental: bytes | None = None
+
+    def full_bytes(self) -> bytes:
+        """The whole map's bytes (the paper's message)."""
+        if self._full_bytes is None:
+            self._full_bytes = encode(self.full)
+            self._sender._full_len = len(self._full_bytes)
+        return self._full_bytes
+
+    def incremental(self) -> bytes:
+        """The bytes sent in the default ``"delta"`` mode."""
+        if self._incremental is None:
+            if self.delta is None:
+                self._incremental = self.full_bytes()
+            else:
+                delta = encode(self.delta)
+                if len(delta) * 2 < self._last_full_len:
+                    self._incremental = delta
+                else:
+                    full = self.full_bytes()
+                    self._incremental = delta if len(delta) < len(full) else full
+        return self._incremental
+
+    def both(self) -> tuple[bytes, bytes]:
+        """``(full, incremental)``, both encoded."""
+        return self.full_bytes(), self.incremental()
+
+
 class RobotSender:
     """One robot's side of the link: builds its message each round and remembers what the centre holds.
 
@@ -132,6 +187,9 @@ class RobotSender:
         """The last message got no acknowledgement: the centre may hold it or not, so send the whole map."""
         self._changed: Box | None = None
         """Where the robot's :class:`OnBoardGrid` changed since the last acknowledged round (None: nowhere)."""
+        self._full_len = 0
+        """Bytes of the last whole map encoded (0: none yet): :class:`Outgoing` sends a delta of under half of
+        it without encoding this round's whole map."""
 
     def send(
         self, closed: StateGrid, round_: int, position_rc: tuple[int, int], window: tuple[slice, slice] | None = None
@@ -140,12 +198,18 @@ class RobotSender:
 
         ``window``: where ``closed`` lies in the map when it is a window of the robot's grid (holding every
         free cell with a one-cell margin, and growing from round to round); None: ``closed`` is the map."""
+        return self.outgoing(closed, round_, position_rc, window).both()
+
+    def outgoing(
+        self, closed: StateGrid, round_: int, position_rc: tuple[int, int], window: tuple[slice, slice] | None = None
+    ) -> Outgoing:
+        """:meth:`send`'s messages, each encoded when asked for."""
         if window is None:
             window = (slice(0, closed.shape[0]), slice(0, closed.shape[1]))
         origin = (window[0].start, window[1].start)
         full = sparse_frontier_map(closed, self.robot, round_, position_rc, origin, self._acked.shape)
         # The acknowledged map's cells lie in an earlier, smaller window: comparing in this one suffices.
-        return self._both(full, lambda: changed_since(self._acked, full, self._acked_round, window))
+        return self._outgoing(full, lambda: changed_since(self._acked, full, self._acked_round, window))
 
     def note_changed(self, box: Box | None) -> None:
         """The robot's :class:`OnBoardGrid` changed in ``box`` this round (what :meth:`OnBoardGrid.update`
@@ -155,9 +219,10 @@ class RobotSender:
 
     def send_onboard(
         self, grid: OnBoardGrid, round_: int, position_rc: tuple[int, int], window: tuple[slice, slice]
-    ) -> tuple[bytes, bytes]:
-        """:meth:`send` from the robot's up-to-date :class:`OnBoardGrid` (same bytes), its codes reused and
-        the delta compared only where the grid changed since the last acknowledgement."""
+    ) -> Outgoing:
+        """:meth:`send`'s messages from the robot's up-to-date :class:`OnBoardGrid` (the same bytes), its
+        codes reused and the delta compared only where the grid changed since the last acknowledgement;
+        encoded when asked for (:class:`Outgoing`)."""
         origin, shape = (window[0].start, window[1].start), self._acked.shape
         closed, codes = grid.closed[window], grid.codes[window]
         seeds = grid.seeds(position_rc, window)
@@ -165,7 +230,7 @@ class RobotSender:
             closed, codes, self.robot, round_, position_rc, origin, shape, grid.cells, grid.n_free, seeds
         )
         box = self._changed if self._changed is not None else _EMPTY
-        return self._both(full, lambda: changed_in_box(self._acked, grid.codes, full, self._acked_round, box))
+        return self._outgoing(full, lambda: changed_in_box(self._acked, grid.codes, full, self._acked_round, box))
 
     def onboard_grid_delta_bytes(self, grid: OnBoardGrid) -> int:
         """:meth:`grid_delta_bytes` of the robot's :class:`OnBoardGrid` state, compared only where it changed
@@ -174,16 +239,12 @@ class RobotSender:
         rows, cols = slice(box[0], box[1]), slice(box[2], box[3])
         return self.grid_delta_bytes(grid.state[rows, cols], (rows, cols))
 
-    def _both(self, full: SparseFrontierMap, delta: Callable[[], SparseFrontierMap]) -> tuple[bytes, bytes]:
-        """``(full, incremental)`` bytes: the delta where it is shorter and the centre surely holds its base."""
-        full_bytes = encode(full)
-        incremental = full_bytes
-        if self._acked_round != FULL and not self._unconfirmed:
-            delta_bytes = encode(delta())
-            if len(delta_bytes) < len(full_bytes):
-                incremental = delta_bytes
+    def _outgoing(self, full: SparseFrontierMap, delta: Callable[[], SparseFrontierMap]) -> Outgoing:
+        """This round's messages; the delta is built now (the acknowledgement of this round changes its
+        base) where the centre surely holds that base, and either is encoded when asked for."""
+        base_held = self._acked_round != FULL and not self._unconfirmed
         self._unconfirmed = True  # until the centre acknowledges this round
-        return full_bytes, incremental
+        return Outgoing(self, full, delta() if base_held else None, self._full_len)
 
     def grid_delta_bytes(self, own: StateGrid, window: tuple[slice, slice]) -> int:
         """Bytes of the generic competitor of the sparse delta: the cells of the int8 occupancy grid that
@@ -337,9 +398,9 @@ class TeamLink:
             return None
         return decode(data)
 
-    def _deliver(self, i: int, data: bytes, full: bytes) -> None:
-        """Robot i's message of this round, with the whole-map request and resend when the centre lacks
-        the delta's base, and the acknowledgement back."""
+    def _deliver(self, i: int, data: bytes, out: Outgoing) -> None:
+        """Robot i's message ``data`` of this round, with the whole-map request and resend when the centre
+        lacks the delta's base, and the acknowledgement back."""
         received = self._send(data)
         if received is None:
             return
@@ -347,6 +408,7 @@ class TeamLink:
             if self._lost():  # the centre's request for the whole map
                 self.totals.acks_lost += 1
                 return
+            full = out.full_bytes()
             self.totals.messages_resent += 1
             self.totals.bytes_resent += len(full)
             received = self._send(full)
@@ -373,6 +435,7 @@ class TeamLink:
         self.robot_ms_each = []
         to_count: list[tuple[int, tuple[int, tuple[slice, slice]], StateGrid]] = []
         counted: list[int] = []  # robots whose grid bytes are known, kept from an earlier round or not
+        sent: list[Outgoing] = []
         # A robot's message covers the box of its observed cells, grown by the closing's reach plus one
         # cell: the closing, the codes and the seeds there equal those of the whole grid (nothing beyond
         # is free).
@@ -386,7 +449,8 @@ class TeamLink:
                 continue
             window = belief.window(margin)
             pos = (int(positions_rc[i][0]), int(positions_rc[i][1]))
-            full_bytes, delta_bytes = sender.send_onboard(grid, r, pos, window)
+            out = sender.send_onboard(grid, r, pos, window)
+            data = out.incremental() if self.mode == "delta" else out.full_bytes()
             t1 = time.perf_counter()
             key = (grid.state_version, window)
             cached = self._grid_bytes[i]
@@ -395,16 +459,19 @@ class TeamLink:
             else:
                 counted.append(i)
             self.totals.bytes_grid_delta_zlib += sender.onboard_grid_delta_bytes(grid)
-            self.totals.bytes_sparse += len(full_bytes)
-            self.totals.bytes_sparse_delta += len(delta_bytes)
+            sent.append(out)
             t2 = time.perf_counter()
             robot_s += t1 - t0
             accounting_s += t2 - t1
             self.robot_ms_each.append((t1 - t0) * 1e3)
-            self._deliver(i, delta_bytes if self.mode == "delta" else full_bytes, full_bytes)
+            self._deliver(i, data, out)
         t0 = time.perf_counter()
-        # The baseline grids, compressed on the threads (zlib and the box's pass let go of the GIL): on a
-        # KTH floor they were a fifth of a whole mission's time on one thread.
+        # What the other transmission mode would have sent, and the baseline grids, encoded on the threads
+        # (zlib and the box's pass let go of the GIL): on a KTH floor the grids were a fifth of a whole
+        # mission's time on one thread.
+        for full_bytes, incremental in map_threads(Outgoing.both, sent):
+            self.totals.bytes_sparse += len(full_bytes)
+            self.totals.bytes_sparse_delta += len(incremental)
         sizes = map_threads(lambda job: occupancy_grid_bytes(job[2]), to_count)
         for (i, key, _), counts in zip(to_count, sizes, strict=True):
             self._grid_bytes[i] = key, counts
