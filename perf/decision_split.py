@@ -11,7 +11,8 @@ its delta fell, or ``rebuild`` whole; the closing and the frontiers redone round
 older checkout lacks are left out), frontier detection where the strategy does it, Mean-Shift, the
 robots' distance fields, the global assignment, layer 3 (``route``, one call per robot; for ``hier`` its
 sub-clustering, candidate distances and order search) and the paths read off the fields; on a large floor
-the pooled coarse grid and the near/far fields. Prints the decision's median and each part's
+the pooled coarse grid (with the portal graph brought up to date) and the near/far fields (the searches
+over blocks or over the portal graph, and the portal graph's reads). Prints the decision's median and each part's
 milliseconds per decision. Parts nest (indented under the part that holds them), so they do not add up
 to the decision. With ``--from-coverage`` the mission first runs untimed
 until the team's coverage reaches it, then the next ``--decisions`` decisions are timed (the mission's own
@@ -38,6 +39,11 @@ from mrexplore.config import MapConfig, MissionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission
 
+try:
+    import mrexplore.paths.portals as portals
+except ImportError:  # an older checkout (``PYTHONPATH`` at it) has no portal graph
+    portals = None
+
 PARTS: tuple[tuple[Any, str, str], ...] = (
     (reconstruction.CentreMap, "state", "state"),
     (reconstruction.CentreMap, "_update", "  update (per robot)"),
@@ -48,8 +54,11 @@ PARTS: tuple[tuple[Any, str, str], ...] = (
     (strategies, "cluster_frontiers", "mean-shift"),
     (strategies, "distance_fields", "distance fields"),
     (strategies, "coarse_grid", "coarse grid"),
+    (portals and portals.PortalGraph, "refresh", "  portal graph kept"),
     (strategies, "far_fields", "near/far fields"),
     (far_field, "_seeded_search", "  coarse searches"),
+    (portals and portals.PortalGraph, "search", "  portal searches"),
+    (portals and portals.PortalField, "values", "  portal reads"),
     (far_field.CoarseGrid, "exact_at", "  exact searches back"),
     (far_field, "distance_fields", "  exact near fields, paths"),
     (strategies.ExplorationPipeline, "assign", "assignment"),

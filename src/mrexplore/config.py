@@ -290,9 +290,23 @@ class GlobalPlanningConfig(_Checked):
     Late on a KTH floor at 0.05 m, blocks of 0.2 m left cluster centres in ragged, ray-lit free space
     unreached (each then costs an exact search back from it); 0.15 m reached all of them
     (``perf/bench_far_fields.py``)."""
+    portal_sector_blocks: int = 24
+    """Far distances are searched on a graph of portals between sectors of this many blocks a side
+    (:mod:`~mrexplore.paths.portals`; 24 blocks of 0.15 m: 3.6 m), kept from decision to decision where
+    the map did not change, instead of over every block; 0: over every block. 0 or >= 2."""
+    portal_spacing_blocks: int = 8
+    """An opening between two sectors longer than this many blocks gets a portal per this many blocks
+    (8 of 0.15 m: 1.2 m), >= 1."""
 
     def _validate(self) -> None:
         _require(self.distance_weight >= 0, "distance_weight", ">= 0", self.distance_weight)
+        _require(
+            self.portal_sector_blocks == 0 or self.portal_sector_blocks >= 2,
+            "portal_sector_blocks",
+            "0 or >= 2",
+            self.portal_sector_blocks,
+        )
+        _require(self.portal_spacing_blocks >= 1, "portal_spacing_blocks", ">= 1", self.portal_spacing_blocks)
         _require(self.size_weight >= 0, "size_weight", ">= 0", self.size_weight)
         _require(self.far_above_cells >= 0, "far_above_cells", ">= 0", self.far_above_cells)
         _require(

@@ -36,6 +36,7 @@ from mrexplore.paths.distance_field import (
     pairwise_distances,
 )
 from mrexplore.paths.far_field import CoarseGrid, NearFarField, coarse_grid, far_fields, path_to
+from mrexplore.paths.portals import PortalGraph
 from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers, split_for_team
 from mrexplore.preprocessing.frontiers import Frontiers, detect_frontiers
 from mrexplore.threads import map_threads
@@ -253,7 +254,12 @@ class ExplorationPipeline:
     """Where a learned planner's weights came from: ``{"path", "sha256", "code_version"}``; None: no network."""
     distances: GlobalPlanningConfig = field(default_factory=GlobalPlanningConfig)
     """Where robot distances stop being exact on large maps (``far_above_cells``, ``exact_radius_m``,
-    ``coarse_cell_m``)."""
+    ``coarse_cell_m``, ``portal_sector_blocks``)."""
+    _portals: dict[tuple[int, int, int], PortalGraph] = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )
+    """The portal graph of each grid shape and block size far distances were searched on, kept from decision
+    to decision (:mod:`~mrexplore.paths.portals`)."""
 
     def prepare(self, truth: GroundTruthMap, starts_rc: NDArray[np.integer], sim: SimConfig) -> None:
         """Called once before a mission; only a yardstick that knows the map uses it."""
@@ -398,7 +404,15 @@ class ExplorationPipeline:
         box = mask_box(passable)
         if box is None or (box[1] - box[0]) * (box[3] - box[2]) <= cfg.far_above_cells:
             return box, None
-        grid = coarse_grid(passable, factor)
+        portals = None
+        if cfg.portal_sector_blocks:
+            key = (int(passable.shape[0]), int(passable.shape[1]), factor)
+            portals = self._portals.get(key)
+            if portals is None:
+                shape = (-(-key[0] // factor), -(-key[1] // factor))
+                portals = PortalGraph(shape, cfg.portal_sector_blocks, cfg.portal_spacing_blocks)
+                self._portals[key] = portals
+        grid = coarse_grid(passable, factor, portals)
         assert grid is not None  # the box holds a passable cell
         return box, FarDistances(max(1, round(cfg.exact_radius_m / resolution_m)), grid)
 

@@ -340,6 +340,93 @@ def _pairwise_kernel(
 _NO_TARGETS = np.zeros(0, dtype=np.int64)
 
 
+@nb.njit(cache=True, nogil=True)
+def _seeded_search(
+    start: np.ndarray, Wp: int, seeds: np.ndarray, seed_keys: np.ndarray, q_node: np.ndarray, q_key: np.ndarray
+) -> np.ndarray:  # pragma: no cover - numba
+    """Distances over the padded flat grid ``start`` (:func:`_start_values`, row length ``Wp``) from many
+    sources, each with its own starting distance: ``seeds`` (padded flat indices) sorted by ``seed_keys``.
+
+    The two-queue search of :mod:`~mrexplore.paths.distance_field` with a third queue, the seeds: all three
+    stay sorted (the seeds from the start, the others because keys pop in order), so the smallest of the
+    three fronts is the global minimum and the result is Dijkstra's. ``inf`` where unreachable or blocked.
+    """
+    inf = np.float32(np.inf)
+    zero = np.float32(0.0)
+    best = start.copy()
+    ns = seeds.shape[0]
+    for j in range(ns):
+        s = seeds[j]
+        if best[s] >= zero and seed_keys[j] < best[s]:
+            best[s] = seed_keys[j]
+    hs = h0 = t0 = h1 = t1 = 0
+    while hs < ns or h0 < t0 or h1 < t1:
+        which = -1
+        du = inf
+        if hs < ns:
+            which, du = 2, seed_keys[hs]
+        if h0 < t0 and (which < 0 or q_key[0, h0] < du):
+            which, du = 0, q_key[0, h0]
+        if h1 < t1 and (which < 0 or q_key[1, h1] < du):
+            which, du = 1, q_key[1, h1]
+        if which == 2:
+            u = seeds[hs]
+            hs += 1
+        elif which == 0:
+            u = q_node[0, h0]
+            h0 += 1
+        else:
+            u = q_node[1, h1]
+            h1 += 1
+        if best[u] < zero or du > best[u]:
+            continue  # blocked seed, or stale: settled with a smaller key
+        t0, t1 = _relax(best, Wp, u, du, q_node, q_key, t0, t1)
+    for i in range(best.shape[0]):
+        if best[i] < zero:
+            best[i] = inf
+    return best
+
+
+@nb.njit(cache=True, nogil=True)
+def _descend_to_seed(
+    field: np.ndarray, passable: np.ndarray, seed_key: np.ndarray, gr: int, gc: int
+) -> np.ndarray:  # pragma: no cover - numba
+    """Blocks from ``(gr, gc)`` down ``field`` to the first block whose value its seed explains
+    (``seed_key``, ``inf`` for blocks that are no seed); ``(k, 2) int32``, the goal's block first; empty
+    when the goal's block is unreachable."""
+    H, W = field.shape
+    out = np.empty((H * W, 2), dtype=np.int32)
+    if not np.isfinite(field[gr, gc]):
+        return out[:0]
+    r, c, n = gr, gc, 0
+    while True:
+        out[n, 0] = r
+        out[n, 1] = c
+        n += 1
+        here = field[r, c]
+        if seed_key[r, c] <= here + 1e-4 or n >= H * W:
+            break
+        br, bc, best = -1, -1, here
+        for dr in range(-1, 2):
+            for dc in range(-1, 2):
+                if dr == 0 and dc == 0:
+                    continue
+                rr, cc = r + dr, c + dc
+                if rr < 0 or rr >= H or cc < 0 or cc >= W or not passable[rr, cc]:
+                    continue
+                step = 1.0
+                if dr != 0 and dc != 0:
+                    if not passable[r, cc] or not passable[rr, c]:
+                        continue
+                    step = math.sqrt(2.0)
+                if field[rr, cc] + step <= here + 1e-4 and field[rr, cc] < best:
+                    br, bc, best = rr, cc, field[rr, cc]
+        if br < 0:
+            break
+        r, c = br, bc
+    return out[:n].copy()
+
+
 class _Searches:
     """Searches from many sources over one grid: its padded start values built once, each thread's queues and
     target marks allocated once and reused (:func:`_two_queue_dijkstra`)."""

@@ -29,12 +29,14 @@ from mrexplore.boxes import mask_box
 from mrexplore.paths.distance_field import (
     Field,
     _crop,
-    _relax,
+    _descend_to_seed,
     _search_into,
     _Searches,
+    _seeded_search,
     descend_path,
     distance_fields,
 )
+from mrexplore.paths.portals import PortalField, PortalGraph
 from mrexplore.threads import map_threads
 from mrexplore.types import BoolGrid, GridRC
 
@@ -42,93 +44,6 @@ __all__ = ["CoarseGrid", "NearFarField", "coarse_grid", "far_fields", "path_to"]
 
 _SQRT2 = math.sqrt(2.0)
 _NEIGHBOURHOOD = [(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1)]
-
-
-@nb.njit(cache=True, nogil=True)
-def _seeded_search(
-    start: np.ndarray, Wp: int, seeds: np.ndarray, seed_keys: np.ndarray, q_node: np.ndarray, q_key: np.ndarray
-) -> np.ndarray:  # pragma: no cover - numba
-    """Distances over the padded flat grid ``start`` (:func:`_start_values`, row length ``Wp``) from many
-    sources, each with its own starting distance: ``seeds`` (padded flat indices) sorted by ``seed_keys``.
-
-    The two-queue search of :mod:`~mrexplore.paths.distance_field` with a third queue, the seeds: all three
-    stay sorted (the seeds from the start, the others because keys pop in order), so the smallest of the
-    three fronts is the global minimum and the result is Dijkstra's. ``inf`` where unreachable or blocked.
-    """
-    inf = np.float32(np.inf)
-    zero = np.float32(0.0)
-    best = start.copy()
-    ns = seeds.shape[0]
-    for j in range(ns):
-        s = seeds[j]
-        if best[s] >= zero and seed_keys[j] < best[s]:
-            best[s] = seed_keys[j]
-    hs = h0 = t0 = h1 = t1 = 0
-    while hs < ns or h0 < t0 or h1 < t1:
-        which = -1
-        du = inf
-        if hs < ns:
-            which, du = 2, seed_keys[hs]
-        if h0 < t0 and (which < 0 or q_key[0, h0] < du):
-            which, du = 0, q_key[0, h0]
-        if h1 < t1 and (which < 0 or q_key[1, h1] < du):
-            which, du = 1, q_key[1, h1]
-        if which == 2:
-            u = seeds[hs]
-            hs += 1
-        elif which == 0:
-            u = q_node[0, h0]
-            h0 += 1
-        else:
-            u = q_node[1, h1]
-            h1 += 1
-        if best[u] < zero or du > best[u]:
-            continue  # blocked seed, or stale: settled with a smaller key
-        t0, t1 = _relax(best, Wp, u, du, q_node, q_key, t0, t1)
-    for i in range(best.shape[0]):
-        if best[i] < zero:
-            best[i] = inf
-    return best
-
-
-@nb.njit(cache=True, nogil=True)
-def _descend_to_seed(
-    field: np.ndarray, passable: np.ndarray, seed_key: np.ndarray, gr: int, gc: int
-) -> np.ndarray:  # pragma: no cover - numba
-    """Blocks from ``(gr, gc)`` down ``field`` to the first block whose value its seed explains
-    (``seed_key``, ``inf`` for blocks that are no seed); ``(k, 2) int32``, the goal's block first; empty
-    when the goal's block is unreachable."""
-    H, W = field.shape
-    out = np.empty((H * W, 2), dtype=np.int32)
-    if not np.isfinite(field[gr, gc]):
-        return out[:0]
-    r, c, n = gr, gc, 0
-    while True:
-        out[n, 0] = r
-        out[n, 1] = c
-        n += 1
-        here = field[r, c]
-        if seed_key[r, c] <= here + 1e-4 or n >= H * W:
-            break
-        br, bc, best = -1, -1, here
-        for dr in range(-1, 2):
-            for dc in range(-1, 2):
-                if dr == 0 and dc == 0:
-                    continue
-                rr, cc = r + dr, c + dc
-                if rr < 0 or rr >= H or cc < 0 or cc >= W or not passable[rr, cc]:
-                    continue
-                step = 1.0
-                if dr != 0 and dc != 0:
-                    if not passable[r, cc] or not passable[rr, c]:
-                        continue
-                    step = math.sqrt(2.0)
-                if field[rr, cc] + step <= here + 1e-4 and field[rr, cc] < best:
-                    br, bc, best = rr, cc, field[rr, cc]
-        if br < 0:
-            break
-        r, c = br, bc
-    return out[:n].copy()
 
 
 @nb.njit(cache=True, nogil=True)
@@ -220,13 +135,20 @@ class CoarseGrid:
     """The fine grid's searches (:meth:`exact_at`), built on first use."""
     _finer: list[CoarseGrid | None] = field(default_factory=list, repr=False, compare=False)
     """:meth:`finer`, built on first use."""
+    portals: PortalGraph | None = field(default=None, repr=False, compare=False)
+    """The portal graph far distances are searched on (:mod:`~mrexplore.paths.portals`), brought up to
+    date with these blocks; None: each far field searches every block."""
 
     @classmethod
-    def of(cls, passable: BoolGrid, factor: int) -> CoarseGrid | None:
+    def of(cls, passable: BoolGrid, factor: int, portals: PortalGraph | None = None) -> CoarseGrid | None:
         box = mask_box(passable)
         if box is None:
             return None
         r0, r1, c0, c1 = box
+        if portals is not None:
+            # Blocks on the map's own lattice of sectors, so the graph kept from the last decision lines up.
+            step = factor * portals.S
+            r0, c0 = r0 // step * step, c0 // step * step
         grid = np.ascontiguousarray(passable)
         # Bands of whole block rows on the threads (the kernel releases the GIL; only the last band
         # meets the box's far edge, so each block is pooled as in one pass).
@@ -235,7 +157,9 @@ class CoarseGrid:
         bands = [(a, b) for a, b in zip(cuts[:-1], cuts[1:], strict=True) if b > a]
         parts = map_threads(lambda ab: _pool(grid, ab[0], ab[1], c0, c1, factor), bands)
         pooled = parts[0] if len(parts) == 1 else np.vstack(parts)
-        return cls(pooled, factor, r0, c0, _Searches(pooled), passable)
+        if portals is not None:
+            portals.refresh(pooled, r0 // factor, c0 // factor)
+        return cls(pooled, factor, r0, c0, _Searches(pooled), passable, portals=portals)
 
     def tails(self, cells: NDArray[np.int64]) -> NDArray[np.float64]:
         """``(k, 9) float64``: for each cell, the exact distance from the middle of its block and of each of
@@ -302,29 +226,39 @@ class NearFarField:
 
     near: Field
     radius_cells: float
-    coarse: NDArray[np.float32]
-    """``(h, w) float32`` block distances, in blocks, on :attr:`grid`'s blocks; ``inf`` where unreachable."""
+    coarse: NDArray[np.float32] | None
+    """``(h, w) float32`` block distances, in blocks, on :attr:`grid`'s blocks; ``inf`` where unreachable.
+    None where :attr:`portal` answers them."""
     grid: CoarseGrid
-    seed_key: NDArray[np.float32]
-    """``(h, w) float32`` the starting distance of each seed block (in blocks); ``inf`` for others."""
+    seed_key: NDArray[np.float32] | None
+    """``(h, w) float32`` the starting distance of each seed block (in blocks); ``inf`` for others (None
+    with :attr:`portal`)."""
     known: dict[tuple[int, int], float] = field(default_factory=dict)
     """Distances found otherwise, for cells the coarse grid leaves at ``inf`` (:func:`far_fields`: joined
     back from the cell, on blocks half as wide, or exact); they take precedence."""
+    portal: PortalField | None = None
+    """The block distances searched on the grid's portal graph, where it has one."""
+
+    def blocks(self, rr: NDArray[np.int64], cc: NDArray[np.int64]) -> NDArray[np.float64]:
+        """``(k,) float64`` block distances (in blocks) at :attr:`grid`'s blocks ``(rr, cc)`` (inside it)."""
+        if self.portal is not None:
+            g = self.grid
+            return self.portal.values(np.stack([rr + g.r0 // g.factor, cc + g.c0 // g.factor], axis=1))
+        assert self.coarse is not None
+        return self.coarse[rr, cc].astype(np.float64)
 
     def _far(self, cells: NDArray[np.int64]) -> NDArray[np.float64]:
         g, f = self.grid, self.grid.factor
-        h, w = self.coarse.shape
+        h, w = g.passable.shape
         tails = g.tails(cells)
         br = (cells[:, 0] - g.r0) // f
         bc = (cells[:, 1] - g.c0) // f
-        out = np.full(len(cells), np.inf)
-        for j, (dr, dc) in enumerate(_NEIGHBOURHOOD):
-            rr, cc = br + dr, bc + dc
-            ok = (rr >= 0) & (rr < h) & (cc >= 0) & (cc < w)
-            d = np.full(len(cells), np.inf)
-            d[ok] = self.coarse[rr[ok], cc[ok]].astype(np.float64) * f + tails[ok, j]
-            np.minimum(out, d, out=out)
-        return out
+        step = np.array(_NEIGHBOURHOOD, np.int64)
+        rr, cc = br[:, None] + step[None, :, 0], bc[:, None] + step[None, :, 1]  # (k, 9): block, neighbours
+        ok = (rr >= 0) & (rr < h) & (cc >= 0) & (cc < w)
+        d = np.full(rr.shape, np.inf)
+        d[ok] = self.blocks(rr[ok], cc[ok]) * f + tails[ok]
+        return d.min(axis=1) if len(cells) else np.zeros(0)
 
     def at(self, cells_rc: NDArray[np.integer]) -> NDArray[np.float64]:
         """Distances in cells at ``(k, 2) int`` cells, ``(k,) float64``."""
@@ -394,6 +328,8 @@ def _seeds(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radiu
 
 
 def _one(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius: int) -> NearFarField:
+    if grid.portals is not None:
+        return _one_on_portals(passable, grid, grid.portals, src, radius)
     seeds = _seeds(passable, grid, src, radius)
     f = grid.factor
     h, w = grid.passable.shape
@@ -405,6 +341,24 @@ def _one(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius:
     flat = s.padded(blocks[:, 0] * w + blocks[:, 1])
     coarse = _seeded_search(s.start, s.wp, flat, keys, q_node, q_key).reshape(h + 2, w + 2)[1:-1, 1:-1]
     return NearFarField(seeds.near, float(radius), coarse, grid, seed_key)
+
+
+def _one_on_portals(
+    passable: BoolGrid, grid: CoarseGrid, portals: PortalGraph, src: NDArray[np.integer], radius: int
+) -> NearFarField:
+    """:func:`_one` on the portal graph: the exact search up to ``radius``, then the graph searched from the
+    nodes it reaches, each keyed by its exact distance (in blocks) to the node block's middle cell."""
+    r0, r1, c0, c1 = _near_box(passable, src, radius)
+    local = np.array([[int(src[0]) - r0, int(src[1]) - c0]])
+    near = distance_fields(passable[r0:r1, c0:c1], local, limit=float(radius))[0]
+    near = Field(near.values, near.r0 + r0, near.c0 + c0, (int(passable.shape[0]), int(passable.shape[1])))
+    f = grid.factor
+    ids, blocks = portals.nodes_in(r0 // f, -(-r1 // f), c0 // f, -(-c1 // f))
+    mids = blocks * f + f // 2
+    d = near.at(mids)
+    keep = d <= radius
+    field_ = portals.search(ids[keep], d[keep] / f)
+    return NearFarField(near, float(radius), None, grid, None, portal=field_)
 
 
 def _back(
@@ -428,8 +382,8 @@ def _back(
     seeds = _seeds(passable, grid, cell, radius)
     out = np.full(len(sources), np.inf)
     if len(seeds.blocks):
-        coarse = np.stack([fl.coarse[seeds.blocks[:, 0], seeds.blocks[:, 1]] for fl in fields])
-        out = np.min(coarse.astype(np.float64) * grid.factor + seeds.cells[None, :], axis=1)
+        coarse = np.stack([fl.blocks(seeds.blocks[:, 0], seeds.blocks[:, 1]) for fl in fields])
+        out = np.min(coarse * grid.factor + seeds.cells[None, :], axis=1)
     exact = seeds.near.at(sources)
     inside = exact <= radius
     out[inside] = exact[inside]
@@ -471,9 +425,11 @@ def _finer_of(passable: BoolGrid, factor: int) -> CoarseGrid | None:
     return CoarseGrid.of(passable, side) if side < factor else None
 
 
-def coarse_grid(passable: BoolGrid, factor: int) -> CoarseGrid | None:
+def coarse_grid(passable: BoolGrid, factor: int, portals: PortalGraph | None = None) -> CoarseGrid | None:
     """``passable`` pooled into ``factor`` x ``factor`` blocks, for :func:`far_fields` calls on the same grid to
-    share (pooling a KTH floor at 0.05 m takes about 3 ms); None where no cell is passable.
+    share (pooling a KTH floor at 0.05 m takes about 3 ms); None where no cell is passable. ``portals``: a
+    graph kept from earlier decisions on this map (:mod:`~mrexplore.paths.portals`), brought up to date
+    here, which far fields then search instead of every block.
 
     Examples
     --------
@@ -483,7 +439,7 @@ def coarse_grid(passable: BoolGrid, factor: int) -> CoarseGrid | None:
     """
     if passable.dtype != np.bool_:
         passable = passable.astype(bool)
-    return CoarseGrid.of(passable, factor)
+    return CoarseGrid.of(passable, factor, portals)
 
 
 def far_fields(
@@ -615,17 +571,24 @@ def path_to(field: Field | NearFarField, passable: BoolGrid, src_rc: GridRC, goa
     if field.is_exact(*goal):
         return descend_path(field.near, passable, goal)
     g, f = field.grid, field.grid.factor
-    h, w = field.coarse.shape
+    h, w = g.passable.shape
     # The goal's block or the neighbour that explains its estimate, then down the coarse field to a seed.
     br, bc = (goal[0] - g.r0) // f, (goal[1] - g.c0) // f
-    best, start = math.inf, (-1, -1)
-    for dr, dc in _NEIGHBOURHOOD:
-        rr, cc = br + dr, bc + dc
-        if 0 <= rr < h and 0 <= cc < w and field.coarse[rr, cc] < best:
-            best, start = float(field.coarse[rr, cc]), (rr, cc)
+    around = np.array([(br + dr, bc + dc) for dr, dc in _NEIGHBOURHOOD], np.int64)
+    around = around[(around[:, 0] >= 0) & (around[:, 0] < h) & (around[:, 1] >= 0) & (around[:, 1] < w)]
+    values = field.blocks(around[:, 0], around[:, 1]) if len(around) else np.zeros(0)
+    start = (-1, -1)
+    if len(values) and np.isfinite(values.min()):
+        start = (int(around[np.argmin(values), 0]), int(around[np.argmin(values), 1]))
     corridor = np.zeros((h, w), dtype=bool)
     if start[0] >= 0:
-        blocks = _descend_to_seed(field.coarse, g.passable, field.seed_key, start[0], start[1])
+        if field.portal is not None:
+            off = np.array([g.r0 // f, g.c0 // f])
+            blocks = field.portal.way_back((start[0] + int(off[0]), start[1] + int(off[1])))[0] - off
+            blocks = blocks[(blocks[:, 0] >= 0) & (blocks[:, 0] < h) & (blocks[:, 1] >= 0) & (blocks[:, 1] < w)]
+        else:
+            assert field.coarse is not None and field.seed_key is not None
+            blocks = _descend_to_seed(field.coarse, g.passable, field.seed_key, start[0], start[1])
         corridor[blocks[:, 0], blocks[:, 1]] = True
         # The exact part: from the seed's middle cell back to the robot.
         seed_mid = g.centres_rc(blocks[-1:])[0]

@@ -1,0 +1,456 @@
+"""Far distances on a graph of sector portals, kept where the map changes (hierarchical path-finding).
+
+Late in a mission on a whole building, a robot's far distances came from a search over every passable block
+of the floor (:mod:`~mrexplore.paths.far_field`): on a KTH floor at 0.05 m about 250,000 blocks of 0.15 m
+a robot, eight searches a decision, half the decision. The floor changes only where the robots' scans fell.
+
+So the block grid is cut into sectors of ``S`` x ``S`` blocks, as in hierarchical pathfinding (Botea,
+Müller and Schaeffer 2004, HPA*). Where two side-by-side sectors meet, each run of passable block pairs
+across their border is an entrance. Each entrance gets portals: one pair of blocks facing each other, at
+the middle of an entrance of up to ``spacing`` blocks, and at the middles of equal parts of a longer one,
+so a straight way across an open hall bends by at most a few blocks at a border. A portal's block is a
+node; nodes in one sector are joined by their distance inside the sector, nodes facing each other across
+a border by one block. A decision searches this graph (a few nodes per sector instead of ``S * S``
+blocks) from the nodes within the robot's exact
+radius, keyed by its exact distances there, and reads a block's distance as the best over its sector's
+nodes plus the way inside the sector, searched for the sectors read only.
+
+:class:`PortalGraph` keeps the nodes, the distances inside each sector and the edges across borders from
+decision to decision, and redoes them only for the sectors whose blocks changed and their four
+neighbours. Every distance it gives is the length of a real path of whole blocks, so never shorter than the
+block search's; it is longer where the shortest way crosses a border off a portal.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+from numpy.typing import NDArray
+
+from mrexplore.paths.distance_field import _descend_to_seed, _seeded_search
+
+__all__ = ["PortalField", "PortalGraph"]
+
+
+@nb.njit(cache=True, nogil=True)
+def _sector_start(G: np.ndarray, br0: int, bc0: int, S: int) -> np.ndarray:  # pragma: no cover - numba
+    """The sector of ``S`` x ``S`` blocks at block ``(br0, bc0)`` of ``G`` as a search starts it: padded
+    flat, ``inf`` where passable, ``-1`` elsewhere (:func:`~mrexplore.paths.distance_field._start_values`)."""
+    Wp = S + 2
+    start = np.full((S + 2) * Wp, np.float32(-1.0), dtype=np.float32)
+    for a in range(S):
+        for b in range(S):
+            if G[br0 + a, bc0 + b]:
+                start[(a + 1) * Wp + b + 1] = np.inf
+    return start
+
+
+@nb.njit(cache=True, nogil=True)
+def _border(
+    G: np.ndarray, r: int, c: int, dr: int, dc: int, orr: int, occ: int, S: int, K: int, out: np.ndarray, n: int
+) -> int:  # pragma: no cover - numba
+    """Append to ``out[n:]`` this sector's portal blocks on one border: blocks ``(r + t dr, c + t dc)`` for
+    ``t < S``, each facing ``(+orr, +occ)``. Both sectors of a border walk it in the same direction, so they
+    place the same portals. Returns the new count (a block already listed, a corner, is not repeated)."""
+    t = 0
+    while t < S:
+        if not (G[r + t * dr, c + t * dc] and G[r + t * dr + orr, c + t * dc + occ]):
+            t += 1
+            continue
+        a = t
+        while t < S and G[r + t * dr, c + t * dc] and G[r + t * dr + orr, c + t * dc + occ]:
+            t += 1
+        length = t - a
+        m = 1 if length <= K else (length + K - 1) // K
+        for i in range(m):
+            p = a + ((2 * i + 1) * length) // (2 * m)
+            rr, cc = r + p * dr, c + p * dc
+            seen = False
+            for j in range(n):
+                if out[j, 0] == rr and out[j, 1] == cc:
+                    seen = True
+            if not seen:
+                out[n, 0] = rr
+                out[n, 1] = cc
+                n += 1
+    return n
+
+
+@nb.njit(cache=True, nogil=True)
+def _sector_nodes(G: np.ndarray, si: int, sj: int, S: int, K: int, out: np.ndarray) -> int:  # pragma: no cover
+    """The portal blocks of sector ``(si, sj)`` into ``out`` (global block rows and columns); their count."""
+    H, W = G.shape
+    R, C = si * S, sj * S
+    n = 0
+    if R > 0:
+        n = _border(G, R, C, 0, 1, -1, 0, S, K, out, n)
+    if R + S < H:
+        n = _border(G, R + S - 1, C, 0, 1, 1, 0, S, K, out, n)
+    if C > 0:
+        n = _border(G, R, C, 1, 0, 0, -1, S, K, out, n)
+    if C + S < W:
+        n = _border(G, R, C + S - 1, 1, 0, 0, 1, S, K, out, n)
+    return n
+
+
+@nb.njit(cache=True, nogil=True)
+def _refresh(
+    G: np.ndarray,
+    S: int,
+    K: int,
+    dirty: np.ndarray,
+    n_nodes: np.ndarray,
+    nodes: np.ndarray,
+    intra: np.ndarray,
+    inter: np.ndarray,
+    node_at: np.ndarray,
+    longest: np.ndarray,
+) -> None:  # pragma: no cover - numba
+    """Redo the nodes, the distances between them inside the sector (``intra``; ``longest``, the longest
+    of them) and the edges across borders (``inter``) of the ``dirty`` sectors; the edges of their
+    neighbours too, which point into them."""
+    nsw = G.shape[1] // S
+    n_slots = n_nodes.shape[0]
+    max_nodes = nodes.shape[1]
+    Wp = S + 2
+    for slot in dirty:
+        for k in range(n_nodes[slot]):
+            node_at[nodes[slot, k, 0], nodes[slot, k, 1]] = -1
+        n_nodes[slot] = 0
+    for slot in dirty:
+        n = _sector_nodes(G, slot // nsw, slot % nsw, S, K, nodes[slot])
+        n_nodes[slot] = n
+        for k in range(n):
+            node_at[nodes[slot, k, 0], nodes[slot, k, 1]] = slot * max_nodes + k
+    cap = S * S + 1
+    q_node = np.empty((2, cap), dtype=np.int32)
+    q_key = np.empty((2, cap), dtype=np.float32)
+    seed = np.zeros(1, dtype=np.int64)
+    key = np.zeros(1, dtype=np.float32)
+    for slot in dirty:
+        n = n_nodes[slot]
+        longest[slot] = 0.0
+        if n == 0:
+            continue
+        br0, bc0 = (slot // nsw) * S, (slot % nsw) * S
+        start = _sector_start(G, br0, bc0, S)
+        for k in range(n):
+            seed[0] = (nodes[slot, k, 0] - br0 + 1) * Wp + nodes[slot, k, 1] - bc0 + 1
+            best = _seeded_search(start, Wp, seed, key, q_node, q_key)
+            for j in range(n):
+                d = best[(nodes[slot, j, 0] - br0 + 1) * Wp + nodes[slot, j, 1] - bc0 + 1]
+                intra[slot, k, j] = d
+                if d < np.inf and d > longest[slot]:
+                    longest[slot] = d
+    mark = np.zeros(n_slots, dtype=np.bool_)
+    for slot in dirty:
+        mark[slot] = True
+        si, sj = slot // nsw, slot % nsw
+        if si > 0:
+            mark[slot - nsw] = True
+        if slot + nsw < n_slots:
+            mark[slot + nsw] = True
+        if sj > 0:
+            mark[slot - 1] = True
+        if sj + 1 < nsw:
+            mark[slot + 1] = True
+    H, W = G.shape
+    for slot in range(n_slots):
+        if not mark[slot]:
+            continue
+        for k in range(n_nodes[slot]):
+            r, c = nodes[slot, k, 0], nodes[slot, k, 1]
+            for t, (dr, dc) in enumerate(((-1, 0), (1, 0), (0, -1), (0, 1))):
+                rr, cc = r + dr, c + dc
+                inter[slot, k, t] = -1
+                if 0 <= rr < H and 0 <= cc < W and (rr // S != r // S or cc // S != c // S):
+                    inter[slot, k, t] = node_at[rr, cc]
+
+
+@nb.njit(cache=True, nogil=True)
+def _graph_search(
+    n_nodes: np.ndarray,
+    intra: np.ndarray,
+    inter: np.ndarray,
+    longest_edge: float,
+    seed_ids: np.ndarray,
+    seed_keys: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - numba
+    """Dijkstra over the portal graph from ``seed_ids`` at ``seed_keys`` (blocks): each node's distance
+    (``inf`` where unreached) and the node it was reached from (``-1`` for a seed and unreached).
+
+    Every edge is at least one block long (two distinct blocks, or a step across a border), so the queue
+    is one of buckets a block wide (Dial's): a key relaxed from bucket ``b`` lands in ``b + 1`` or later,
+    so every key in a bucket is final when the bucket is reached, in whatever order it is popped. No edge
+    is longer than ``longest_edge`` (a way inside one sector), so the buckets are a ring of more than
+    that. Every array is sized up front: growing one inside the loop made numba count references at every
+    step (8 ms a search late on a KTH floor, against under 2 now)."""
+    max_nodes = intra.shape[1]
+    N = n_nodes.shape[0] * max_nodes
+    dist = np.full(N, np.inf, dtype=np.float32)
+    parent = np.full(N, -1, dtype=np.int32)
+    done = np.zeros(N, dtype=np.bool_)
+    cap = seed_ids.shape[0] + 1
+    for slot in range(n_nodes.shape[0]):
+        cap += n_nodes[slot] * (n_nodes[slot] + 4)  # every edge improves its end at most once
+    ring = 1
+    longest = longest_edge
+    for i in range(seed_keys.shape[0]):
+        longest = max(longest, float(seed_keys[i]))
+    while ring <= longest + 2:
+        ring *= 2
+    head = np.full(ring, -1, dtype=np.int64)
+    e_node = np.empty(cap, dtype=np.int64)
+    e_next = np.empty(cap, dtype=np.int64)
+    n_entries = 0
+    live = 0
+    for i in range(seed_ids.shape[0]):
+        u = seed_ids[i]
+        if seed_keys[i] < dist[u]:
+            dist[u] = seed_keys[i]
+            b = int(seed_keys[i]) % ring
+            e_node[n_entries] = u
+            e_next[n_entries] = head[b]
+            head[b] = n_entries
+            n_entries += 1
+            live += 1
+    b = 0
+    while live > 0:
+        e = head[b % ring]
+        if e < 0:
+            b += 1
+            continue
+        head[b % ring] = e_next[e]
+        live -= 1
+        u = e_node[e]
+        du = dist[u]
+        if done[u] or int(du) != b:
+            continue  # settled already, or stale: settled from a lower bucket
+        done[u] = True
+        slot, k = u // max_nodes, u % max_nodes
+        base = slot * max_nodes
+        n = n_nodes[slot]
+        for t in range(n + 4):
+            if t < n:
+                w = intra[slot, k, t]
+                if t == k or not w < np.inf:
+                    continue
+                v = base + t
+                nd = du + w
+            else:
+                v = inter[slot, k, t - n]
+                if v < 0:
+                    continue
+                nd = du + np.float32(1.0)
+            if nd < dist[v]:
+                dist[v] = nd
+                parent[v] = u
+                nb_ = int(nd) % ring
+                e_node[n_entries] = v
+                e_next[n_entries] = head[nb_]
+                head[nb_] = n_entries
+                n_entries += 1
+                live += 1
+    return dist, parent
+
+
+@nb.njit(cache=True, nogil=True)
+def _fill(
+    G: np.ndarray, S: int, slot: int, nodes: np.ndarray, n_nodes: np.ndarray, slot_dist: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - numba
+    """``(S, S) float32`` distances (blocks) to every block of sector ``slot``: the best over its nodes of
+    the node's distance (``slot_dist``, by the node's place in the sector) plus the way inside the sector;
+    and ``(S, S) float32`` each node's own distance at its block (``inf`` elsewhere), the seeds a path is
+    read back to."""
+    nsw = G.shape[1] // S
+    br0, bc0 = (slot // nsw) * S, (slot % nsw) * S
+    Wp = S + 2
+    n = n_nodes[slot]
+    keys = np.empty(n, dtype=np.float32)
+    cells = np.empty(n, dtype=np.int64)
+    seed_key = np.full((S, S), np.inf, dtype=np.float32)
+    m = 0
+    for k in range(n):
+        d = slot_dist[k]
+        if d < np.inf:
+            a, b = nodes[slot, k, 0] - br0, nodes[slot, k, 1] - bc0
+            keys[m] = d
+            cells[m] = (a + 1) * Wp + b + 1
+            seed_key[a, b] = d
+            m += 1
+    order = np.argsort(keys[:m], kind="mergesort")
+    q_node = np.empty((2, S * S + 1), dtype=np.int32)
+    q_key = np.empty((2, S * S + 1), dtype=np.float32)
+    best = _seeded_search(_sector_start(G, br0, bc0, S), Wp, cells[:m][order], keys[:m][order], q_node, q_key)
+    return best.reshape((S + 2, Wp))[1:-1, 1:-1].copy(), seed_key
+
+
+@nb.njit(cache=True, nogil=True)
+def _fill_many(
+    G: np.ndarray,
+    S: int,
+    slots: np.ndarray,
+    nodes: np.ndarray,
+    n_nodes: np.ndarray,
+    dist: np.ndarray,
+    store: np.ndarray,
+    at: int,
+) -> None:  # pragma: no cover - numba
+    """:func:`_fill` for each of ``slots`` into ``store[at], store[at + 1], ...``."""
+    m = nodes.shape[1]
+    for i in range(slots.shape[0]):
+        slot = slots[i]
+        store[at + i] = _fill(G, S, slot, nodes, n_nodes, dist[slot * m : (slot + 1) * m])[0]
+
+
+class PortalGraph:
+    """The portal graph of one map's block grid, kept from decision to decision (module docstring).
+
+    Parameters
+    ----------
+    shape_blocks:
+        ``(rows, cols)`` of the whole map in blocks (block ``(i, j)`` covers fine rows ``i f ...``).
+    sector_blocks:
+        ``S``, a sector's side in blocks, >= 2.
+    spacing_blocks:
+        An entrance longer than this gets more than one portal, >= 1.
+    """
+
+    def __init__(self, shape_blocks: tuple[int, int], sector_blocks: int, spacing_blocks: int) -> None:
+        if sector_blocks < 2:
+            raise ValueError(f"sector_blocks must be >= 2, got {sector_blocks}")
+        if spacing_blocks < 1:
+            raise ValueError(f"spacing_blocks must be >= 1, got {spacing_blocks}")
+        S, K = sector_blocks, spacing_blocks
+        self.S, self.K = S, K
+        self.nsh, self.nsw = -(-shape_blocks[0] // S), -(-shape_blocks[1] // S)
+        self.grid = np.zeros((self.nsh * S, self.nsw * S), dtype=np.bool_)
+        # Per border at most S / K portals plus one per run of passable pairs (a run ends at a blocked pair).
+        max_nodes = 4 * (S // K + 1 + (S + 1) // 2)
+        n_slots = self.nsh * self.nsw
+        self.n_nodes = np.zeros(n_slots, dtype=np.int64)
+        self.nodes = np.zeros((n_slots, max_nodes, 2), dtype=np.int64)
+        self.intra = np.full((n_slots, max_nodes, max_nodes), np.inf, dtype=np.float32)
+        self.inter = np.full((n_slots, max_nodes, 4), -1, dtype=np.int64)
+        self.node_at = np.full(self.grid.shape, -1, dtype=np.int64)
+        self.longest = np.zeros(n_slots, dtype=np.float32)
+        """Per sector, the longest way between two of its nodes (blocks)."""
+        self.redone = 0
+        """Sectors redone by the last :meth:`refresh` (changed ones and their neighbours)."""
+
+    @property
+    def max_nodes(self) -> int:
+        return int(self.nodes.shape[1])
+
+    def refresh(self, pooled: NDArray[np.bool_], br0: int, bc0: int) -> None:
+        """Bring the graph to ``pooled`` ``(h, w) bool`` passable blocks, whose block ``(0, 0)`` is the map's
+        block ``(br0, bc0)`` (multiples of the sector side); outside it nothing is passable."""
+        if br0 % self.S or bc0 % self.S:
+            raise ValueError(f"pooled blocks must start on a sector corner, got ({br0}, {bc0}) for sectors of {self.S}")
+        new = np.zeros_like(self.grid)
+        h, w = pooled.shape
+        new[br0 : br0 + h, bc0 : bc0 + w] = pooled[: new.shape[0] - br0, : new.shape[1] - bc0]
+        S = self.S
+        changed = (new != self.grid).reshape(self.nsh, S, self.nsw, S).any(axis=(1, 3))
+        grown = changed.copy()
+        grown[1:] |= changed[:-1]
+        grown[:-1] |= changed[1:]
+        grown[:, 1:] |= changed[:, :-1]
+        grown[:, :-1] |= changed[:, 1:]
+        dirty = np.flatnonzero(grown.ravel())
+        self.grid = new
+        self.redone = len(dirty)
+        if len(dirty):
+            _refresh(
+                new, S, self.K, dirty, self.n_nodes, self.nodes, self.intra, self.inter, self.node_at, self.longest
+            )
+
+    def nodes_in(self, br0: int, br1: int, bc0: int, bc1: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """The nodes whose blocks lie in rows ``[br0, br1)`` and columns ``[bc0, bc1)`` of the map's blocks:
+        ``(k,) int64`` node ids and ``(k, 2) int64`` their blocks."""
+        S = self.S
+        si = np.arange(max(0, br0 // S), min(self.nsh, -(-br1 // S)))
+        sj = np.arange(max(0, bc0 // S), min(self.nsw, -(-bc1 // S)))
+        slots = (si[:, None] * self.nsw + sj[None, :]).ravel()
+        counts = self.n_nodes[slots]
+        k = np.concatenate([np.arange(n) for n in counts]) if len(slots) else np.zeros(0, np.int64)
+        owner = np.repeat(slots, counts)
+        blocks = self.nodes[owner, k]
+        inside = (blocks[:, 0] >= br0) & (blocks[:, 0] < br1) & (blocks[:, 1] >= bc0) & (blocks[:, 1] < bc1)
+        return (owner * self.max_nodes + k)[inside], blocks[inside]
+
+    def search(self, seed_ids: NDArray[np.int64], seed_keys: NDArray[np.floating]) -> PortalField:
+        """Distances from nodes ``seed_ids`` at ``seed_keys`` (blocks) over the graph."""
+        ids, keys = np.asarray(seed_ids, np.int64), np.asarray(seed_keys, np.float32)
+        dist, parent = _graph_search(self.n_nodes, self.intra, self.inter, float(self.longest.max()), ids, keys)
+        return PortalField(self, dist, parent)
+
+
+class PortalField:
+    """One source's distances over a :class:`PortalGraph`: at its nodes, and at any block, in blocks."""
+
+    def __init__(self, graph: PortalGraph, dist: NDArray[np.float32], parent: NDArray[np.int32]) -> None:
+        self.graph, self.dist, self.parent = graph, dist, parent
+        self._where = np.full(graph.nsh * graph.nsw, -1, dtype=np.int64)
+        """Per sector, its place in :attr:`_store` (``-1``: not searched yet)."""
+        self._store = np.empty((0, graph.S, graph.S), dtype=np.float32)
+        self._stored = 0
+
+    def values(self, blocks: NDArray[np.integer]) -> NDArray[np.float64]:
+        """``(k,) float64`` distances (blocks) at ``(k, 2)`` blocks of the map; ``inf`` where unreached or
+        not passable. Each sector read is searched once per field."""
+        g = self.graph
+        b = np.asarray(blocks, np.int64).reshape(-1, 2)
+        out = np.full(len(b), np.inf)
+        ok = (b[:, 0] >= 0) & (b[:, 0] < g.grid.shape[0]) & (b[:, 1] >= 0) & (b[:, 1] < g.grid.shape[1])
+        if not ok.any():
+            return out
+        r, c = b[ok, 0], b[ok, 1]
+        slots = (r // g.S) * g.nsw + c // g.S
+        missing = np.unique(slots[self._where[slots] < 0])
+        if len(missing):
+            need = self._stored + len(missing)
+            if need > len(self._store):
+                grown = np.empty((max(need, 2 * len(self._store)), g.S, g.S), dtype=np.float32)
+                grown[: self._stored] = self._store[: self._stored]
+                self._store = grown
+            _fill_many(g.grid, g.S, missing, g.nodes, g.n_nodes, self.dist, self._store, self._stored)
+            self._where[missing] = np.arange(self._stored, need)
+            self._stored = need
+        out[ok] = self._store[self._where[slots], r % g.S, c % g.S]
+        return out
+
+    def way_back(self, block: tuple[int, int]) -> tuple[NDArray[np.int64], int]:
+        """The blocks of a shortest way from ``block`` back to the seed node it was reached from, ``(k, 2)
+        int64`` (``block`` first), and that seed node's id; an empty way and ``-1`` where it is unreached."""
+        g = self.graph
+        S = g.S
+        r, c = block
+        slot = (r // S) * g.nsw + c // S
+        m = g.max_nodes
+        field, seed_key = _fill(g.grid, S, slot, g.nodes, g.n_nodes, self.dist[slot * m : (slot + 1) * m])
+        if not math.isfinite(float(field[r % S, c % S])):
+            return np.zeros((0, 2), np.int64), -1
+        br0, bc0 = (slot // g.nsw) * S, (slot % g.nsw) * S
+        passable = g.grid[br0 : br0 + S, bc0 : bc0 + S]
+        down = _descend_to_seed(field, passable, seed_key, r - br0, c - bc0).astype(np.int64) + np.array([br0, bc0])
+        parts = [down]
+        u = int(g.node_at[int(down[-1, 0]), int(down[-1, 1])])
+        seen = 0
+        while u >= 0 and self.parent[u] >= 0 and seen <= len(self.dist):
+            p = int(self.parent[u])
+            if p // g.max_nodes == u // g.max_nodes:  # inside one sector: the way between the two nodes
+                slot = u // g.max_nodes
+                br0, bc0 = (slot // g.nsw) * S, (slot % g.nsw) * S
+                only = np.full(g.max_nodes, np.inf, dtype=np.float32)
+                only[p % g.max_nodes] = 0.0
+                f, key = _fill(g.grid, S, slot, g.nodes, g.n_nodes, only)
+                ur, uc = g.nodes[slot, u % g.max_nodes]
+                way = _descend_to_seed(f, g.grid[br0 : br0 + S, bc0 : bc0 + S], key, int(ur) - br0, int(uc) - bc0)
+                parts.append(way.astype(np.int64)[1:] + np.array([br0, bc0]))
+            else:  # across a border: the facing block
+                parts.append(g.nodes[p // g.max_nodes, p % g.max_nodes][None].astype(np.int64))
+            u, seen = p, seen + 1
+        return np.vstack(parts), u
