@@ -10,16 +10,20 @@
 distances at a decision on a large floor): the passable grid, the robots, the cluster centres, the robots'
 own goals. ``replay`` runs each kept call through the ``far_fields`` of whatever checkout it imports, once
 untimed (it may compile numba's caches), then ``--repeats`` times, and prints the least of those runs'
-milliseconds per call (the least disturbed: timings here swing by a fifth from run to run) and how many
-exact searches and near/far fields it made (``--save``: also the robots' distances at the centres, for
-``diff A.npz B.npz`` to say where two versions' differ; ``--factor F``: pool blocks of F cells instead of
-the recorded size, ``--factor 1`` giving exact distances). Versions compared this way see the same calls,
+milliseconds per call (the least disturbed: timings here swing by a fifth from run to run; since the
+portal graph, a call's time counts pooling the blocks too, about 3 ms, which earlier figures left out)
+and how many exact searches and near/far fields it made (``--save``: also the robots' distances at the
+centres, for ``diff A.npz B.npz`` to say where two versions' differ; ``--factor F``: pool blocks of F
+cells instead of the recorded size, ``--factor 1`` giving exact distances; ``--portals``: search far
+distances on a portal graph kept from call to call, as a mission does, each call's time counting the
+graph brought up to date from the previous call's). Versions compared this way see the same calls,
 which whole missions do not once they part. The recording is a pickle of numpy arrays; read only files you made.
 """
 
 from __future__ import annotations
 
 import argparse
+import copy
 import pickle
 import time
 from collections.abc import Callable
@@ -31,7 +35,7 @@ import numpy as np
 import mrexplore.paths.far_field as far_field
 import mrexplore.strategies as strategies
 from mrexplore.cli import run_script
-from mrexplore.config import MapConfig, MissionConfig, SimConfig
+from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission
 
@@ -87,17 +91,26 @@ def _replay(args: argparse.Namespace) -> None:
     far_field._one = counted("near/far fields", far_field._one)
     print(f"far_fields from {far_field.__file__}")
     read: list[np.ndarray] = []
+    graph: Any = None
     for c in calls:
         h, w = c["shape"]
         passable = np.unpackbits(c["passable"])[: h * w].reshape(h, w).astype(bool)
         factor = args.factor or c["factor"]
+        if args.portals and graph is None:
+            from mrexplore.paths.portals import PortalGraph
+
+            cfg = GlobalPlanningConfig()
+            graph = PortalGraph((-(-h // factor), -(-w // factor)), cfg.portal_sector_blocks, cfg.portal_spacing_blocks)
+        before = copy.deepcopy(graph)  # each run brings the graph from the previous call's state
         times = []
         for _ in range(1 + args.repeats):  # the first run may compile and is not timed
-            grid = far_field.coarse_grid(passable, factor)
+            kept = copy.deepcopy(before)
             counts.clear()
             t = time.perf_counter()
+            grid = far_field.coarse_grid(passable, factor, *([kept] if args.portals else []))
             fields = far_field.far_fields(passable, c["sources"], c["radius"], factor, c["must"], c["own"], grid)
             times.append(1e3 * (time.perf_counter() - t))
+        graph = kept
         if args.save is not None:
             read.append(np.stack([f.at(c["must"]) for f in fields]))
         ms = min(times[1:])  # the least disturbed run: this machine's timings swing by a fifth
@@ -132,6 +145,7 @@ def main() -> int:
     rep.add_argument("--repeats", type=int, default=3, help="timed runs per call; the least is printed")
     rep.add_argument("--save", type=Path, default=None, help="the robots' distances at the centres (.npz)")
     rep.add_argument("--factor", type=int, default=None, help="pool blocks of this many cells a side instead")
+    rep.add_argument("--portals", action="store_true", help="far distances on a portal graph kept from call to call")
     dif = sub.add_parser("diff")
     dif.add_argument("a", type=Path)
     dif.add_argument("b", type=Path)

@@ -99,19 +99,28 @@ def test_one_decision_by_hand() -> None:
     assert d.paths[1].tolist() == [[2, 6], [2, 7]]
 
 
-def test_far_distances_on_a_large_map_decide_a_corridor_as_exact_ones_do() -> None:
+@pytest.mark.parametrize("sector", [0, 2, 24])
+def test_far_distances_on_a_large_map_decide_a_corridor_as_exact_ones_do(sector: int) -> None:
     # A corridor with unknown at both ends; the robot at column 30 is 9 cells from the right end, beyond
     # an exact radius of 5 cells: its distance there is estimated on blocks of 2 x 2, its path searched.
+    # Over every block (sector 0), on a portal graph of sectors of 2 blocks, and of 24 blocks: the whole
+    # map in one sector, no portal, where the cells the blocks leave unread are searched on their own.
     state = state_grid("#" * 41 + "\n" + ("?" + "." * 39 + "?\n") * 3 + "#" * 41)
     robots = np.array([[2, 5], [2, 30]], np.int32)
-    far_cfg = GlobalPlanningConfig(far_above_cells=0, exact_radius_m=0.25, coarse_cell_m=0.1)
+    far_cfg = GlobalPlanningConfig(
+        far_above_cells=0, exact_radius_m=0.25, coarse_cell_m=0.1, portal_sector_blocks=sector, portal_spacing_blocks=2
+    )
     exact, far = make_strategy("utility"), make_strategy("utility", far_cfg)
     posed = far.pose(state, robots, 0.05)
     assert posed.problem is not None and posed.work is not None
     fields = posed.work.fields
     assert all(isinstance(f, NearFarField) for f in fields)
     assert isinstance(fields[1], NearFarField) and not fields[1].is_exact(2, 39)
-    assert fields[1].value(2, 39) == 9.0  # whole free blocks along row 1-2, then the last cell
+    # Over every block: whole free blocks along rows 1-2, then the last cell. On portals the blocks start
+    # on the sectors' lattice, at row 0, so their middles lie in row 3: a diagonal step off the robot's
+    # row at each end of the way. With no portal the cell is unread and searched on its own, exactly.
+    want = {0: 9.0, 2: 9.0 + 2 * (np.sqrt(2.0) - 1.0), 24: 9.0}[sector]
+    assert fields[1].value(2, 39) == pytest.approx(want)
     d_exact, d_far = exact.decide(state, robots, 0.05), far.decide(state, robots, 0.05)
     assert d_far.goals_rc.tolist() == d_exact.goals_rc.tolist() == [[2, 1], [2, 39]]
     assert [p.tolist() for p in d_far.paths] == [p.tolist() for p in d_exact.paths]
