@@ -126,7 +126,6 @@ class CoarseGrid:
     factor: int
     r0: int
     c0: int
-    search: _Searches
     fine: NDArray[np.bool_]
     """The ``(H, W) bool`` grid it was pooled from."""
     memo: dict[tuple[int, int], NDArray[np.float64]] = field(default_factory=dict)
@@ -135,6 +134,8 @@ class CoarseGrid:
     """The fine grid's searches (:meth:`exact_at`), built on first use."""
     _finer: list[CoarseGrid | None] = field(default_factory=list, repr=False, compare=False)
     """:meth:`finer`, built on first use."""
+    _search: list[_Searches] = field(default_factory=list, repr=False, compare=False)
+    """:attr:`search`, built on first use."""
     portals: PortalGraph | None = field(default=None, repr=False, compare=False)
     """The portal graph far distances are searched on (:mod:`~mrexplore.paths.portals`), brought up to
     date with these blocks; None: each far field searches every block."""
@@ -159,7 +160,18 @@ class CoarseGrid:
         pooled = parts[0] if len(parts) == 1 else np.vstack(parts)
         if portals is not None:
             portals.refresh(pooled, r0 // factor, c0 // factor)
-        return cls(pooled, factor, r0, c0, _Searches(pooled), passable, portals=portals)
+        out = cls(pooled, factor, r0, c0, passable, portals=portals)
+        if portals is None:
+            out._search.append(_Searches(pooled))  # every far field searches it: built before the threads
+        return out
+
+    @property
+    def search(self) -> _Searches:
+        """Searches over the blocks, built on first use (a grid whose far fields search its portal graph
+        seldom needs them)."""
+        if not self._search:
+            self._search.append(_Searches(self.passable))
+        return self._search[0]
 
     def tails(self, cells: NDArray[np.int64]) -> NDArray[np.float64]:
         """``(k, 9) float64``: for each cell, the exact distance from the middle of its block and of each of

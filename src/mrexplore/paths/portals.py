@@ -101,6 +101,7 @@ def _refresh(
     S: int,
     K: int,
     dirty: np.ndarray,
+    changed: np.ndarray,
     n_nodes: np.ndarray,
     nodes: np.ndarray,
     intra: np.ndarray,
@@ -108,28 +109,47 @@ def _refresh(
     node_at: np.ndarray,
     longest: np.ndarray,
 ) -> None:  # pragma: no cover - numba
-    """Redo the nodes, the distances between them inside the sector (``intra``; ``longest``, the longest
-    of them) and the edges across borders (``inter``) of the ``dirty`` sectors; the edges of their
-    neighbours too, which point into them."""
+    """Bring the ``dirty`` sectors (those whose blocks ``changed``, by sector, and their neighbours) up to
+    date: their nodes; the distances between the nodes inside the sector (``intra``; ``longest``, the
+    longest of them) where the blocks changed or the nodes moved; and the edges across borders
+    (``inter``) round every sector whose nodes moved. A neighbour's nodes move only where the changed
+    sector's blocks on their common border did, so most neighbours keep their ways."""
     nsw = G.shape[1] // S
     n_slots = n_nodes.shape[0]
     max_nodes = nodes.shape[1]
     Wp = S + 2
-    for slot in dirty:
-        for k in range(n_nodes[slot]):
-            node_at[nodes[slot, k, 0], nodes[slot, k, 1]] = -1
-        n_nodes[slot] = 0
-    for slot in dirty:
-        n = _sector_nodes(G, slot // nsw, slot % nsw, S, K, nodes[slot])
-        n_nodes[slot] = n
-        for k in range(n):
-            node_at[nodes[slot, k, 0], nodes[slot, k, 1]] = slot * max_nodes + k
+    fresh = np.zeros((dirty.shape[0], max_nodes, 2), dtype=nodes.dtype)
+    counts = np.zeros(dirty.shape[0], dtype=np.int64)
+    moved = np.zeros(n_slots, dtype=np.bool_)
+    for i in range(dirty.shape[0]):
+        slot = dirty[i]
+        n = _sector_nodes(G, slot // nsw, slot % nsw, S, K, fresh[i])
+        counts[i] = n
+        if n != n_nodes[slot]:
+            moved[slot] = True
+        else:
+            for k in range(n):
+                if fresh[i, k, 0] != nodes[slot, k, 0] or fresh[i, k, 1] != nodes[slot, k, 1]:
+                    moved[slot] = True
+        if moved[slot]:
+            for k in range(n_nodes[slot]):
+                node_at[nodes[slot, k, 0], nodes[slot, k, 1]] = -1
+    for i in range(dirty.shape[0]):
+        slot = dirty[i]
+        if moved[slot]:
+            n_nodes[slot] = counts[i]
+            for k in range(counts[i]):
+                nodes[slot, k, 0] = fresh[i, k, 0]
+                nodes[slot, k, 1] = fresh[i, k, 1]
+                node_at[nodes[slot, k, 0], nodes[slot, k, 1]] = slot * max_nodes + k
     cap = S * S + 1
     q_node = np.empty((2, cap), dtype=np.int32)
     q_key = np.empty((2, cap), dtype=np.float32)
     seed = np.zeros(1, dtype=np.int64)
     key = np.zeros(1, dtype=np.float32)
     for slot in dirty:
+        if not (moved[slot] or changed[slot]):
+            continue
         n = n_nodes[slot]
         longest[slot] = 0.0
         if n == 0:
@@ -146,6 +166,8 @@ def _refresh(
                     longest[slot] = d
     mark = np.zeros(n_slots, dtype=np.bool_)
     for slot in dirty:
+        if not moved[slot]:
+            continue
         mark[slot] = True
         si, sj = slot // nsw, slot % nsw
         if si > 0:
@@ -338,7 +360,7 @@ class PortalGraph:
         self.longest = np.zeros(n_slots, dtype=np.float32)
         """Per sector, the longest way between two of its nodes (blocks)."""
         self.redone = 0
-        """Sectors redone by the last :meth:`refresh` (changed ones and their neighbours)."""
+        """Sectors whose blocks changed at the last :meth:`refresh`."""
 
     @property
     def max_nodes(self) -> int:
@@ -361,10 +383,20 @@ class PortalGraph:
         grown[:, :-1] |= changed[:, 1:]
         dirty = np.flatnonzero(grown.ravel())
         self.grid = new
-        self.redone = len(dirty)
+        self.redone = int(changed.sum())
         if len(dirty):
             _refresh(
-                new, S, self.K, dirty, self.n_nodes, self.nodes, self.intra, self.inter, self.node_at, self.longest
+                new,
+                S,
+                self.K,
+                dirty,
+                changed.ravel(),
+                self.n_nodes,
+                self.nodes,
+                self.intra,
+                self.inter,
+                self.node_at,
+                self.longest,
             )
 
     def nodes_in(self, br0: int, br1: int, bc0: int, bc1: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
