@@ -35,7 +35,7 @@ import mrexplore.paths.far_field as far_field
 import mrexplore.preprocessing.reconstruction as reconstruction
 import mrexplore.strategies as strategies
 from mrexplore.cli import run_script
-from mrexplore.config import MapConfig, MissionConfig, SimConfig
+from mrexplore.config import MapConfig, MissionConfig, RunConfig, SimConfig, read_config_file
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission
 
@@ -57,7 +57,7 @@ PARTS: tuple[tuple[Any, str, str], ...] = (
     (portals and portals.PortalGraph, "refresh", "  portal graph kept"),
     (strategies, "far_fields", "near/far fields"),
     (far_field, "_seeded_search", "  coarse searches"),
-    (portals and portals.PortalGraph, "search", "  portal searches"),
+    (portals and portals.PortalGraph, "search_from", "  portal searches"),
     (portals and portals.PortalField, "values", "  portal reads"),
     (far_field.CoarseGrid, "exact_at", "  exact searches back"),
     (far_field, "distance_fields", "  exact near fields, paths"),
@@ -90,13 +90,17 @@ def main() -> int:
     ap.add_argument("--resolution", type=float, default=0.05)
     ap.add_argument("--from-coverage", type=float, default=None, help="time from this coverage (0-1) on")
     ap.add_argument("--decisions", type=int, default=20, help="decisions timed with --from-coverage")
+    ap.add_argument("--config", type=Path, help="a run config (YAML) whose planning settings to use")
     args = ap.parse_args()
+    cfg = read_config_file(args.config) if args.config else RunConfig()
     late = args.from_coverage is not None
     spent: dict[str, list[float]] = {}
     truth = load_map(args.map or largest_houseexpo(), MapConfig(resolution_m=args.resolution))
     mission = Mission(
         truth,
-        strategies.make_strategy(args.strategy),
+        strategies.make_strategy(
+            args.strategy, cfg.global_planning, cfg.preprocess, cfg.local_planning, coscan_cfg=cfg.coscan
+        ),
         SimConfig(robots=args.robots),
         MissionConfig(100_000) if late else MissionConfig(args.steps, 10),
         0,

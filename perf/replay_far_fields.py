@@ -96,18 +96,22 @@ def _replay(args: argparse.Namespace) -> None:
         h, w = c["shape"]
         passable = np.unpackbits(c["passable"])[: h * w].reshape(h, w).astype(bool)
         factor = args.factor or c["factor"]
-        if args.portals and graph is None:
+        if args.portals and graph is None:  # the blocks' graph and the finer blocks' one, as a mission keeps
             from mrexplore.paths.portals import PortalGraph
 
             cfg = GlobalPlanningConfig()
-            graph = PortalGraph((-(-h // factor), -(-w // factor)), cfg.portal_sector_blocks, cfg.portal_spacing_blocks)
-        before = copy.deepcopy(graph)  # each run brings the graph from the previous call's state
+            graph = [
+                PortalGraph((-(-h // side), -(-w // side)), cfg.portal_sector_blocks, cfg.portal_spacing_blocks)
+                for side in (factor, far_field.finer_side(factor))
+                if side is not None
+            ]
+        before = copy.deepcopy(graph)  # each run brings the graphs from the previous call's state
         times = []
         for _ in range(1 + args.repeats):  # the first run may compile and is not timed
             kept = copy.deepcopy(before)
             counts.clear()
             t = time.perf_counter()
-            grid = far_field.coarse_grid(passable, factor, *([kept] if args.portals else []))
+            grid = far_field.coarse_grid(passable, factor, *(kept if args.portals else []))
             fields = far_field.far_fields(passable, c["sources"], c["radius"], factor, c["must"], c["own"], grid)
             times.append(1e3 * (time.perf_counter() - t))
         graph = kept

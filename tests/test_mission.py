@@ -118,8 +118,8 @@ def test_far_distances_on_a_large_map_decide_a_corridor_as_exact_ones_do(sector:
     assert isinstance(fields[1], NearFarField) and not fields[1].is_exact(2, 39)
     # Over every block: whole free blocks along rows 1-2, then the last cell. On portals the blocks start
     # on the sectors' lattice, at row 0, so their middles lie in row 3: a diagonal step off the robot's
-    # row at each end of the way. With no portal the cell is unread and searched on its own, exactly.
-    want = {0: 9.0, 2: 9.0 + 2 * (np.sqrt(2.0) - 1.0), 24: 9.0}[sector]
+    # row at each end of the way; in one sector, with no portal, through the robot's own seed blocks.
+    want = {0: 9.0, 2: 9.0 + 2 * (np.sqrt(2.0) - 1.0), 24: 9.0 + 2 * (np.sqrt(2.0) - 1.0)}[sector]
     assert fields[1].value(2, 39) == pytest.approx(want)
     d_exact, d_far = exact.decide(state, robots, 0.05), far.decide(state, robots, 0.05)
     assert d_far.goals_rc.tolist() == d_exact.goals_rc.tolist() == [[2, 1], [2, 39]]

@@ -35,7 +35,7 @@ from mrexplore.paths.distance_field import (
     distances_at,
     pairwise_distances,
 )
-from mrexplore.paths.far_field import CoarseGrid, NearFarField, coarse_grid, far_fields, path_to
+from mrexplore.paths.far_field import CoarseGrid, NearFarField, coarse_grid, far_fields, finer_side, path_to
 from mrexplore.paths.portals import PortalGraph
 from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers, split_for_team
 from mrexplore.preprocessing.frontiers import Frontiers, detect_frontiers
@@ -404,17 +404,25 @@ class ExplorationPipeline:
         box = mask_box(passable)
         if box is None or (box[1] - box[0]) * (box[3] - box[2]) <= cfg.far_above_cells:
             return box, None
-        portals = None
+        portals = finer = None
         if cfg.portal_sector_blocks:
-            key = (int(passable.shape[0]), int(passable.shape[1]), factor)
-            portals = self._portals.get(key)
-            if portals is None:
-                shape = (-(-key[0] // factor), -(-key[1] // factor))
-                portals = PortalGraph(shape, cfg.portal_sector_blocks, cfg.portal_spacing_blocks)
-                self._portals[key] = portals
-        grid = coarse_grid(passable, factor, portals)
+            portals = self._portal_graph(passable.shape, factor)
+            side = finer_side(factor)
+            finer = self._portal_graph(passable.shape, side) if side is not None else None
+        grid = coarse_grid(passable, factor, portals, finer)
         assert grid is not None  # the box holds a passable cell
         return box, FarDistances(max(1, round(cfg.exact_radius_m / resolution_m)), grid)
+
+    def _portal_graph(self, shape: tuple[int, ...], factor: int) -> PortalGraph:
+        """The portal graph kept for a grid of ``shape`` cells pooled into blocks of ``factor``."""
+        key = (int(shape[0]), int(shape[1]), factor)
+        graph = self._portals.get(key)
+        if graph is None:
+            cfg = self.distances
+            blocks = (-(-key[0] // factor), -(-key[1] // factor))
+            graph = PortalGraph(blocks, cfg.portal_sector_blocks, cfg.portal_spacing_blocks)
+            self._portals[key] = graph
+        return graph
 
     def assign(self, posed: PosedDecision) -> Assignment:
         """The global layer's answer to a posed decision: the planner's, or the owners the strategy fixed."""

@@ -172,3 +172,44 @@ def test_far_fields_on_portals_are_real_paths_and_paths_reach_far_goals(seed: in
 def test_the_sector_side_is_checked() -> None:
     with pytest.raises(MrExploreError, match="portal_sector_blocks must be 0 or >= 2, got 1"):
         GlobalPlanningConfig(portal_sector_blocks=1)
+
+
+def test_a_robot_whose_exact_part_reaches_no_portal_reads_far_cells_through_its_own_blocks() -> None:
+    # An open floor in sectors of 8 blocks of 2 cells (16 cells); the robot stands in the middle of one,
+    # 8 cells from every border, and its exact part reaches 3 cells: no portal. Its seed blocks reach the
+    # sector's portals inside the sector, so far cells read a real way, never shorter than the exact one.
+    # It bends at the portals (two per border here): the diagonal to (60, 60) reads 11.5% over the exact.
+    passable = np.ones((64, 64), bool)
+    graph = PortalGraph((32, 32), 8, 4)
+    grid = coarse_grid(passable, 2, graph)
+    assert grid is not None
+    src = np.array([24, 24])
+    goals = np.array([[60, 60], [2, 50], [40, 5]])
+    field = far_fields(passable, src[None], 3, 2, None, None, grid)[0]
+    exact = distance_fields(passable, src[None])[0].at(goals)
+    got = field.at(goals)
+    assert np.isfinite(got).all()
+    assert (got >= exact - 1e-3).all() and (got <= exact * 1.15).all()
+
+
+def test_cells_the_blocks_close_off_are_read_on_the_finer_blocks_portal_graph() -> None:
+    # A room and a hall joined through a thick wall by a corridor 4 cells wide at rows 9-12: blocks of 3
+    # on the sectors' lattice (rows 9-11 and 12-14) hold no whole block of it, so the far field searches
+    # the corridor's cells on blocks of 2, on their own portal graph, and no exact search runs.
+    passable = np.zeros((30, 90), bool)
+    passable[1:29, 1:30] = True
+    passable[1:29, 60:89] = True
+    passable[9:13, 30:60] = True
+    coarse, finer = PortalGraph((10, 30), 4, 2), PortalGraph((15, 45), 4, 2)
+    grid = coarse_grid(passable, 3, coarse, finer)
+    assert grid is not None
+    src, goal = np.array([[15, 10]]), np.array([[15, 80]])
+    exact_searches = []
+    plain = grid.exact_at
+    object.__setattr__(grid, "exact_at", lambda *a: exact_searches.append(a) or plain(*a))
+    field = far_fields(passable, src, 5, 3, goal, None, grid)[0]
+    want = distance_fields(passable, src)[0].at(goal)[0]
+    assert field.value(15, 80) >= want - 1e-3 and field.value(15, 80) <= want * 1.1
+    assert not exact_searches
+    assert grid.finer() is not None and grid.finer().portals is finer
+    assert finer.n_nodes.sum() > 0  # brought up to date when first used

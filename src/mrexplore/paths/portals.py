@@ -24,6 +24,7 @@ block search's; it is longer where the shortest way crosses a border off a porta
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -192,31 +193,76 @@ def _refresh(
 
 
 @nb.njit(cache=True, nogil=True)
+def _compact(
+    n_nodes: np.ndarray, intra: np.ndarray, inter: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - numba
+    """The graph's nodes numbered ``0 .. n - 1`` and its edges in rows (compressed sparse rows), what a
+    search reads: ``compact`` (the number of each node id, ``-1`` for none), ``node_of`` (the id of each
+    number), ``indptr``, ``adj`` and ``wt`` (each number's edges, ``adj[indptr[i] : indptr[i + 1]]``, their
+    lengths in blocks)."""
+    max_nodes = intra.shape[1]
+    N = n_nodes.shape[0] * max_nodes
+    compact = np.full(N, -1, dtype=np.int64)
+    n = 0
+    for slot in range(n_nodes.shape[0]):
+        n += n_nodes[slot]
+    node_of = np.empty(n, dtype=np.int64)
+    i = 0
+    edges = 0
+    for slot in range(n_nodes.shape[0]):
+        for k in range(n_nodes[slot]):
+            compact[slot * max_nodes + k] = i
+            node_of[i] = slot * max_nodes + k
+            i += 1
+            edges += n_nodes[slot] + 4
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    adj = np.empty(edges, dtype=np.int64)
+    wt = np.empty(edges, dtype=np.float32)
+    e = 0
+    for i in range(n):
+        u = node_of[i]
+        slot, k = u // max_nodes, u % max_nodes
+        for j in range(n_nodes[slot]):
+            w = intra[slot, k, j]
+            if j != k and w < np.inf:
+                adj[e] = compact[slot * max_nodes + j]
+                wt[e] = w
+                e += 1
+        for t in range(4):
+            v = inter[slot, k, t]
+            if v >= 0:
+                adj[e] = compact[v]
+                wt[e] = 1.0
+                e += 1
+        indptr[i + 1] = e
+    return compact, node_of, indptr, adj[:e].copy(), wt[:e].copy()
+
+
+@nb.njit(cache=True, nogil=True)
 def _graph_search(
-    n_nodes: np.ndarray,
-    intra: np.ndarray,
-    inter: np.ndarray,
+    indptr: np.ndarray,
+    adj: np.ndarray,
+    wt: np.ndarray,
     longest_edge: float,
-    seed_ids: np.ndarray,
+    seeds: np.ndarray,
     seed_keys: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - numba
-    """Dijkstra over the portal graph from ``seed_ids`` at ``seed_keys`` (blocks): each node's distance
-    (``inf`` where unreached) and the node it was reached from (``-1`` for a seed and unreached).
+    """Dijkstra over the portal graph (:func:`_compact`'s rows) from nodes ``seeds`` at ``seed_keys``
+    (blocks): each node's distance (``inf`` where unreached) and the node it was reached from (``-1`` for
+    a seed and unreached).
 
     Every edge is at least one block long (two distinct blocks, or a step across a border), so the queue
     is one of buckets a block wide (Dial's): a key relaxed from bucket ``b`` lands in ``b + 1`` or later,
     so every key in a bucket is final when the bucket is reached, in whatever order it is popped. No edge
     is longer than ``longest_edge`` (a way inside one sector), so the buckets are a ring of more than
     that. Every array is sized up front: growing one inside the loop made numba count references at every
-    step (8 ms a search late on a KTH floor, against under 2 now)."""
-    max_nodes = intra.shape[1]
-    N = n_nodes.shape[0] * max_nodes
-    dist = np.full(N, np.inf, dtype=np.float32)
-    parent = np.full(N, -1, dtype=np.int32)
-    done = np.zeros(N, dtype=np.bool_)
-    cap = seed_ids.shape[0] + 1
-    for slot in range(n_nodes.shape[0]):
-        cap += n_nodes[slot] * (n_nodes[slot] + 4)  # every edge improves its end at most once
+    step (8 ms a search late on a KTH floor; 1.6 ms with the arrays sized, on the sectors' own tables;
+    on these rows, less)."""
+    n = indptr.shape[0] - 1
+    dist = np.full(n, np.inf, dtype=np.float32)
+    parent = np.full(n, -1, dtype=np.int64)
+    done = np.zeros(n, dtype=np.bool_)
+    cap = seeds.shape[0] + adj.shape[0] + 1  # every edge improves its end at most once
     ring = 1
     longest = longest_edge
     for i in range(seed_keys.shape[0]):
@@ -228,8 +274,8 @@ def _graph_search(
     e_next = np.empty(cap, dtype=np.int64)
     n_entries = 0
     live = 0
-    for i in range(seed_ids.shape[0]):
-        u = seed_ids[i]
+    for i in range(seeds.shape[0]):
+        u = seeds[i]
         if seed_keys[i] < dist[u]:
             dist[u] = seed_keys[i]
             b = int(seed_keys[i]) % ring
@@ -251,21 +297,9 @@ def _graph_search(
         if done[u] or int(du) != b:
             continue  # settled already, or stale: settled from a lower bucket
         done[u] = True
-        slot, k = u // max_nodes, u % max_nodes
-        base = slot * max_nodes
-        n = n_nodes[slot]
-        for t in range(n + 4):
-            if t < n:
-                w = intra[slot, k, t]
-                if t == k or not w < np.inf:
-                    continue
-                v = base + t
-                nd = du + w
-            else:
-                v = inter[slot, k, t - n]
-                if v < 0:
-                    continue
-                nd = du + np.float32(1.0)
+        for j in range(indptr[u], indptr[u + 1]):
+            v = adj[j]
+            nd = du + wt[j]
             if nd < dist[v]:
                 dist[v] = nd
                 parent[v] = u
@@ -280,18 +314,27 @@ def _graph_search(
 
 @nb.njit(cache=True, nogil=True)
 def _fill(
-    G: np.ndarray, S: int, slot: int, nodes: np.ndarray, n_nodes: np.ndarray, slot_dist: np.ndarray
+    G: np.ndarray,
+    S: int,
+    slot: int,
+    nodes: np.ndarray,
+    n_nodes: np.ndarray,
+    slot_dist: np.ndarray,
+    extra_cells: np.ndarray,
+    extra_keys: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - numba
     """``(S, S) float32`` distances (blocks) to every block of sector ``slot``: the best over its nodes of
-    the node's distance (``slot_dist``, by the node's place in the sector) plus the way inside the sector;
-    and ``(S, S) float32`` each node's own distance at its block (``inf`` elsewhere), the seeds a path is
-    read back to."""
+    the node's distance (``slot_dist``, by the node's place in the sector) and over the source's own seed
+    blocks in it (``extra_cells``, ``a S + b`` inside the sector, at ``extra_keys``) plus the way inside the
+    sector; and ``(S, S) float32`` each seed's own distance at its block (``inf`` elsewhere), what a path
+    is read back to."""
     nsw = G.shape[1] // S
     br0, bc0 = (slot // nsw) * S, (slot % nsw) * S
     Wp = S + 2
     n = n_nodes[slot]
-    keys = np.empty(n, dtype=np.float32)
-    cells = np.empty(n, dtype=np.int64)
+    e = extra_cells.shape[0]
+    keys = np.empty(n + e, dtype=np.float32)
+    cells = np.empty(n + e, dtype=np.int64)
     seed_key = np.full((S, S), np.inf, dtype=np.float32)
     m = 0
     for k in range(n):
@@ -302,6 +345,12 @@ def _fill(
             cells[m] = (a + 1) * Wp + b + 1
             seed_key[a, b] = d
             m += 1
+    for i in range(e):
+        a, b = extra_cells[i] // S, extra_cells[i] % S
+        keys[m] = extra_keys[i]
+        cells[m] = (a + 1) * Wp + b + 1
+        seed_key[a, b] = min(seed_key[a, b], extra_keys[i])
+        m += 1
     order = np.argsort(keys[:m], kind="mergesort")
     q_node = np.empty((2, S * S + 1), dtype=np.int32)
     q_key = np.empty((2, S * S + 1), dtype=np.float32)
@@ -317,14 +366,55 @@ def _fill_many(
     nodes: np.ndarray,
     n_nodes: np.ndarray,
     dist: np.ndarray,
+    ex_first: np.ndarray,
+    ex_cells: np.ndarray,
+    ex_keys: np.ndarray,
     store: np.ndarray,
     at: int,
 ) -> None:  # pragma: no cover - numba
-    """:func:`_fill` for each of ``slots`` into ``store[at], store[at + 1], ...``."""
+    """:func:`_fill` for each of ``slots`` into ``store[at], store[at + 1], ...``; a sector's own seeds are
+    ``ex_cells[ex_first[slot] : ex_first[slot + 1]]`` (at ``ex_keys``)."""
     m = nodes.shape[1]
     for i in range(slots.shape[0]):
         slot = slots[i]
-        store[at + i] = _fill(G, S, slot, nodes, n_nodes, dist[slot * m : (slot + 1) * m])[0]
+        a, b = ex_first[slot], ex_first[slot + 1]
+        own = dist[slot * m : (slot + 1) * m]
+        store[at + i] = _fill(G, S, slot, nodes, n_nodes, own, ex_cells[a:b], ex_keys[a:b])[0]
+
+
+@nb.njit(cache=True, nogil=True)
+def _node_seeds(
+    G: np.ndarray,
+    S: int,
+    nodes: np.ndarray,
+    n_nodes: np.ndarray,
+    ex_first: np.ndarray,
+    ex_cells: np.ndarray,
+    ex_keys: np.ndarray,
+    slots: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - numba
+    """The nodes of ``slots`` the source's own seed blocks reach inside their sector, and their distances
+    there: where the graph search starts (node ids, keys in blocks)."""
+    m = nodes.shape[1]
+    none = np.full(m, np.inf, dtype=np.float32)
+    total = 0
+    for slot in slots:
+        total += n_nodes[slot]
+    ids = np.empty(total, dtype=np.int64)
+    keys = np.empty(total, dtype=np.float32)
+    nsw = G.shape[1] // S
+    j = 0
+    for slot in slots:
+        a, b = ex_first[slot], ex_first[slot + 1]
+        field = _fill(G, S, slot, nodes, n_nodes, none, ex_cells[a:b], ex_keys[a:b])[0]
+        br0, bc0 = (slot // nsw) * S, (slot % nsw) * S
+        for k in range(n_nodes[slot]):
+            d = field[nodes[slot, k, 0] - br0, nodes[slot, k, 1] - bc0]
+            if d < np.inf:
+                ids[j] = slot * m + k
+                keys[j] = d
+                j += 1
+    return ids[:j], keys[:j]
 
 
 class PortalGraph:
@@ -359,6 +449,8 @@ class PortalGraph:
         self.node_at = np.full(self.grid.shape, -1, dtype=np.int64)
         self.longest = np.zeros(n_slots, dtype=np.float32)
         """Per sector, the longest way between two of its nodes (blocks)."""
+        self._rows = _compact(self.n_nodes, self.intra, self.inter)
+        """:func:`_compact` of the graph as it stands."""
         self.redone = 0
         """Sectors whose blocks changed at the last :meth:`refresh`."""
 
@@ -398,6 +490,7 @@ class PortalGraph:
                 self.node_at,
                 self.longest,
             )
+            self._rows = _compact(self.n_nodes, self.intra, self.inter)
 
     def nodes_in(self, br0: int, br1: int, bc0: int, bc1: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
         """The nodes whose blocks lie in rows ``[br0, br1)`` and columns ``[bc0, bc1)`` of the map's blocks:
@@ -415,16 +508,61 @@ class PortalGraph:
 
     def search(self, seed_ids: NDArray[np.int64], seed_keys: NDArray[np.floating]) -> PortalField:
         """Distances from nodes ``seed_ids`` at ``seed_keys`` (blocks) over the graph."""
-        ids, keys = np.asarray(seed_ids, np.int64), np.asarray(seed_keys, np.float32)
-        dist, parent = _graph_search(self.n_nodes, self.intra, self.inter, float(self.longest.max()), ids, keys)
-        return PortalField(self, dist, parent)
+        dist, parent = self._search(np.asarray(seed_ids, np.int64), np.asarray(seed_keys, np.float32))
+        return PortalField(self, dist, parent, _NO_SEEDS)
+
+    def _search(
+        self, ids: NDArray[np.int64], keys: NDArray[np.float32]
+    ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
+        """Distances and the node each was reached from, by node id (``inf`` and ``-1`` where unreached)."""
+        compact, node_of, indptr, adj, wt = self._rows
+        d, p = _graph_search(indptr, adj, wt, float(self.longest.max()), compact[ids], keys)
+        dist = np.full(len(compact), np.inf, dtype=np.float32)
+        parent = np.full(len(compact), -1, dtype=np.int64)
+        dist[node_of] = d
+        reached = p >= 0
+        parent[node_of[reached]] = node_of[p[reached]]
+        return dist, parent
+
+    def search_from(self, blocks: NDArray[np.integer], keys: NDArray[np.floating]) -> PortalField:
+        """Distances from seed blocks ``(k, 2)`` of the map at ``keys`` (blocks), e.g. the blocks a robot's
+        exact search reaches: the nodes each sector's seeds reach inside it start the graph search, and
+        a block of a seeded sector reads the seeds' own ways inside it too (as a search over the blocks
+        from the same seeds would, where those ways pass no portal)."""
+        b = np.asarray(blocks, np.int64).reshape(-1, 2)
+        k = np.asarray(keys, np.float32).reshape(-1)
+        S = self.S
+        slot = (b[:, 0] // S) * self.nsw + b[:, 1] // S
+        order = np.argsort(slot, kind="stable")
+        slot, b, k = slot[order], b[order], k[order]
+        first = np.searchsorted(slot, np.arange(self.nsh * self.nsw + 1)).astype(np.int64)
+        seeds = _Seeds(first, ((b[:, 0] % S) * S + b[:, 1] % S).astype(np.int64), k)
+        ids, node_keys = _node_seeds(self.grid, S, self.nodes, self.n_nodes, *seeds, np.unique(slot))
+        dist, parent = self._search(ids, node_keys)
+        return PortalField(self, dist, parent, seeds)
+
+
+class _Seeds(NamedTuple):
+    """A source's own seed blocks by sector: those of sector ``s`` are ``cells[first[s] : first[s + 1]]``
+    (``a S + b`` inside the sector) at ``keys`` (blocks)."""
+
+    first: NDArray[np.int64]
+    cells: NDArray[np.int64]
+    keys: NDArray[np.float32]
+
+
+_NO_SEEDS = _Seeds(np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.float32))
 
 
 class PortalField:
     """One source's distances over a :class:`PortalGraph`: at its nodes, and at any block, in blocks."""
 
-    def __init__(self, graph: PortalGraph, dist: NDArray[np.float32], parent: NDArray[np.int32]) -> None:
+    def __init__(self, graph: PortalGraph, dist: NDArray[np.float32], parent: NDArray[np.int64], seeds: _Seeds) -> None:
         self.graph, self.dist, self.parent = graph, dist, parent
+        n_slots = graph.nsh * graph.nsw
+        if len(seeds.first) < n_slots + 1:  # no seed blocks: every sector's range is empty
+            seeds = _Seeds(np.zeros(n_slots + 1, np.int64), seeds.cells, seeds.keys)
+        self.seeds = seeds
         self._where = np.full(graph.nsh * graph.nsw, -1, dtype=np.int64)
         """Per sector, its place in :attr:`_store` (``-1``: not searched yet)."""
         self._store = np.empty((0, graph.S, graph.S), dtype=np.float32)
@@ -441,28 +579,36 @@ class PortalField:
             return out
         r, c = b[ok, 0], b[ok, 1]
         slots = (r // g.S) * g.nsw + c // g.S
-        missing = np.unique(slots[self._where[slots] < 0])
+        missing = slots[self._where[slots] < 0]
         if len(missing):
+            missing = np.unique(missing)
             need = self._stored + len(missing)
             if need > len(self._store):
                 grown = np.empty((max(need, 2 * len(self._store)), g.S, g.S), dtype=np.float32)
                 grown[: self._stored] = self._store[: self._stored]
                 self._store = grown
-            _fill_many(g.grid, g.S, missing, g.nodes, g.n_nodes, self.dist, self._store, self._stored)
+            _fill_many(g.grid, g.S, missing, g.nodes, g.n_nodes, self.dist, *self.seeds, self._store, self._stored)
             self._where[missing] = np.arange(self._stored, need)
             self._stored = need
         out[ok] = self._store[self._where[slots], r % g.S, c % g.S]
         return out
 
+    def _own(self, slot: int) -> tuple[NDArray[np.int64], NDArray[np.float32]]:
+        """The source's own seed blocks in sector ``slot`` and their keys."""
+        a, b = int(self.seeds.first[slot]), int(self.seeds.first[slot + 1])
+        return self.seeds.cells[a:b], self.seeds.keys[a:b]
+
     def way_back(self, block: tuple[int, int]) -> tuple[NDArray[np.int64], int]:
-        """The blocks of a shortest way from ``block`` back to the seed node it was reached from, ``(k, 2)
-        int64`` (``block`` first), and that seed node's id; an empty way and ``-1`` where it is unreached."""
+        """The blocks of a shortest way from ``block`` back to a seed, ``(k, 2) int64`` (``block`` first, the
+        seed last: a seed node, or one of the source's own seed blocks), and the last node on it (``-1``
+        where it passes none); an empty way and ``-1`` where ``block`` is unreached."""
         g = self.graph
-        S = g.S
+        S, m = g.S, g.max_nodes
+        none_cells, none_keys = np.zeros(0, np.int64), np.zeros(0, np.float32)
         r, c = block
         slot = (r // S) * g.nsw + c // S
-        m = g.max_nodes
-        field, seed_key = _fill(g.grid, S, slot, g.nodes, g.n_nodes, self.dist[slot * m : (slot + 1) * m])
+        at_nodes = self.dist[slot * m : (slot + 1) * m]
+        field, seed_key = _fill(g.grid, S, slot, g.nodes, g.n_nodes, at_nodes, *self._own(slot))
         if not math.isfinite(float(field[r % S, c % S])):
             return np.zeros((0, 2), np.int64), -1
         br0, bc0 = (slot // g.nsw) * S, (slot % g.nsw) * S
@@ -470,19 +616,28 @@ class PortalField:
         down = _descend_to_seed(field, passable, seed_key, r - br0, c - bc0).astype(np.int64) + np.array([br0, bc0])
         parts = [down]
         u = int(g.node_at[int(down[-1, 0]), int(down[-1, 1])])
+        last = u
         seen = 0
-        while u >= 0 and self.parent[u] >= 0 and seen <= len(self.dist):
+        while u >= 0 and seen <= len(self.dist):
+            slot = u // m
+            br0, bc0 = (slot // g.nsw) * S, (slot % g.nsw) * S
+            ur, uc = (int(x) for x in g.nodes[slot, u % m])
             p = int(self.parent[u])
-            if p // g.max_nodes == u // g.max_nodes:  # inside one sector: the way between the two nodes
-                slot = u // g.max_nodes
-                br0, bc0 = (slot // g.nsw) * S, (slot % g.nsw) * S
-                only = np.full(g.max_nodes, np.inf, dtype=np.float32)
-                only[p % g.max_nodes] = 0.0
-                f, key = _fill(g.grid, S, slot, g.nodes, g.n_nodes, only)
-                ur, uc = g.nodes[slot, u % g.max_nodes]
-                way = _descend_to_seed(f, g.grid[br0 : br0 + S, bc0 : bc0 + S], key, int(ur) - br0, int(uc) - bc0)
-                parts.append(way.astype(np.int64)[1:] + np.array([br0, bc0]))
+            if p < 0:  # a node the source's own seeds in its sector reached: the way back to one of them
+                cells, keys = self._own(slot)
+                only = np.full(m, np.inf, dtype=np.float32)
+            elif p // m == slot:  # inside one sector: the way between the two nodes
+                cells, keys = none_cells, none_keys
+                only = np.full(m, np.inf, dtype=np.float32)
+                only[p % m] = 0.0
             else:  # across a border: the facing block
-                parts.append(g.nodes[p // g.max_nodes, p % g.max_nodes][None].astype(np.int64))
-            u, seen = p, seen + 1
-        return np.vstack(parts), u
+                parts.append(g.nodes[p // m, p % m][None].astype(np.int64))
+                u, last, seen = p, p, seen + 1
+                continue
+            f, key = _fill(g.grid, S, slot, g.nodes, g.n_nodes, only, cells, keys)
+            way = _descend_to_seed(f, g.grid[br0 : br0 + S, bc0 : bc0 + S], key, ur - br0, uc - bc0)
+            parts.append(way.astype(np.int64)[1:] + np.array([br0, bc0]))
+            if p < 0:
+                break
+            u, last, seen = p, p, seen + 1
+        return np.vstack(parts), last
