@@ -118,12 +118,12 @@ def test_the_way_back_is_a_way_of_the_distance_read(seed: int) -> None:
     rng = np.random.default_rng(seed)
     u = int(valid[rng.integers(len(valid))])
     field = g.search(np.array([u]), np.zeros(1))
-    reached = np.argwhere(np.isfinite(field.values(np.argwhere(blocks)).reshape(-1)))
-    goal = tuple(int(x) for x in np.argwhere(blocks)[reached[rng.integers(len(reached)), 0]])
-    way, seed_node = field.way_back(goal)
-    assert seed_node == u
+    free = np.argwhere(blocks)
+    reached = free[np.isfinite(field.values(free))]
+    goal = tuple(int(x) for x in reached[rng.integers(len(reached))])
+    way, seed_block = field.corridor(goal)
     assert tuple(way[0]) == goal
-    assert tuple(way[-1]) == tuple(g.nodes[u // g.max_nodes, u % g.max_nodes])
+    assert tuple(way[-1]) == tuple(seed_block) == tuple(g.nodes[u // g.max_nodes, u % g.max_nodes])
     assert blocks[way[:, 0], way[:, 1]].all()
     steps = np.abs(np.diff(way, axis=0))
     assert (steps.max(axis=1) == 1).all()  # 8-adjacent blocks, no repeats

@@ -259,6 +259,9 @@ class NearFarField:
     back from the cell, on blocks half as wide, or exact); they take precedence."""
     portal: PortalField | None = None
     """The block distances searched on the grid's portal graph, where it has one."""
+    finer: list[NearFarField] = field(default_factory=list)
+    """The same source's field on blocks half as wide, where :func:`far_fields` searched one for cells
+    these blocks leave unread: what :func:`path_to` leads a path to such a cell along."""
 
     def blocks(self, rr: NDArray[np.int64], cc: NDArray[np.int64]) -> NDArray[np.float64]:
         """``(k,) float64`` block distances (in blocks) at :attr:`grid`'s blocks ``(rr, cc)`` (inside it)."""
@@ -529,17 +532,22 @@ def far_fields(
 
     finer: list[CoarseGrid | None] = []
 
-    def unjoined(src: NDArray[np.int64], cells: NDArray[np.int64]) -> NDArray[np.float64]:
+    def unjoined(
+        src: NDArray[np.int64], cells: NDArray[np.int64], keep: NearFarField | None = None
+    ) -> NDArray[np.float64]:
         """Distances from ``src`` at ``cells`` the grid leaves at ``inf``: a near/far field of ``src`` on
         blocks half as wide (:meth:`CoarseGrid.finer`), exact where that leaves them too. Recorded late
         PLAN2 calls at 0.05 m, each of which searched the floor exactly from one centre, went 173/141 ->
         114/94 ms on one thread, the distances so found at most 0.3% longer (``perf/replay_far_fields.py``,
-        docs/results/finer_blocks)."""
+        docs/results/finer_blocks). ``keep``: the source's own field, which keeps the finer one for paths."""
         if not finer:
             finer.append(pooled.finer() if pooled.fine is passable else _finer_of(passable, pooled.factor))
         out = np.full(len(cells), np.inf)
         if finer[0] is not None:
-            out = _one(passable, finer[0], src, radius_cells).at(cells)
+            on_finer = _one(passable, finer[0], src, radius_cells)
+            out = on_finer.at(cells)
+            if keep is not None:
+                keep.finer.append(on_finer)
         still = ~np.isfinite(out)
         if still.any():
             out[still] = exact(src, cells[still])
@@ -560,7 +568,7 @@ def far_fields(
             if own_rc is not None and i < len(own_rc):  # its own goals in the same search
                 own = np.asarray(own_rc[i], np.int64).reshape(-1, 2)
                 cells = np.vstack([cells, own[~np.isfinite(fields[i].at(own))]])
-            for cell, d in zip(cells, unjoined(sources[i], cells), strict=True):
+            for cell, d in zip(cells, unjoined(sources[i], cells, fields[i]), strict=True):
                 fields[i].known[(int(cell[0]), int(cell[1]))] = float(d)
         for cell in must[back]:
             # From the cell: exact through its passage, on along the sources' own coarse fields (no search of
@@ -585,7 +593,7 @@ def far_fields(
         mine = np.asarray(goals, np.int64).reshape(-1, 2)
         unseen = mine[~np.isfinite(f.at(mine))]
         if len(unseen):
-            for cell, d in zip(unseen, unjoined(src, unseen), strict=True):
+            for cell, d in zip(unseen, unjoined(src, unseen, f), strict=True):
                 f.known[(int(cell[0]), int(cell[1]))] = float(d)
     return fields
 
@@ -621,7 +629,8 @@ def path_to(field: Field | NearFarField, passable: BoolGrid, src_rc: GridRC, goa
     if start[0] >= 0:
         if field.portal is not None:
             off = np.array([g.r0 // f, g.c0 // f])
-            blocks = field.portal.way_back((start[0] + int(off[0]), start[1] + int(off[1])))[0] - off
+            ways, seed = field.portal.corridor((start[0] + int(off[0]), start[1] + int(off[1])))
+            blocks = np.vstack([ways, seed[None]]) - off  # the seed last: the exact part runs back from it
             blocks = blocks[(blocks[:, 0] >= 0) & (blocks[:, 0] < h) & (blocks[:, 1] >= 0) & (blocks[:, 1] < w)]
         else:
             assert field.coarse is not None and field.seed_key is not None
@@ -641,6 +650,8 @@ def path_to(field: Field | NearFarField, passable: BoolGrid, src_rc: GridRC, goa
         path = _corridor_path(passable, g, corridor, src_rc, goal)
         if len(path):
             return path
+    elif field.finer:  # a goal these blocks leave unread: along the source's field on blocks half as wide
+        return path_to(field.finer[0], passable, src_rc, goal_rc)
     return descend_path(distance_fields(passable, np.array([src_rc]), np.array([goal]))[0], passable, goal)
 
 
