@@ -373,10 +373,11 @@ def _one_on_portals(
     passable: BoolGrid, grid: CoarseGrid, portals: PortalGraph, src: NDArray[np.integer], radius: int
 ) -> NearFarField:
     """:func:`_one` on the portal graph: the exact search up to ``radius`` and the blocks it seeds
-    (:func:`_seeds`), then the graph searched from the nodes those seeds reach inside their sectors. Seeding
-    the nodes the exact search reaches alone left a robot in a passage the blocks close (whose few seed
-    blocks reach the floor's network only beyond the radius) with no distance beyond it: late on PLAN1,
-    one robot of eight left 15 of 15 cluster centres to searches of their own."""
+    (:func:`_seeds`), then the graph searched from the nodes those seeds reach inside their sectors: seeding
+    only the nodes the exact search reaches left a robot whose exact part reaches no portal with no
+    distance beyond it. A robot whose seed blocks join no node even so (single blocks in a gap that the
+    sectors' lattice cuts) reads ``inf``, and :func:`far_fields` searches what it must read on the finer
+    blocks."""
     seeds = _seeds(passable, grid, src, radius, ordered=False)
     f = grid.factor
     blocks = seeds.blocks + np.array([grid.r0 // f, grid.c0 // f])

@@ -11,13 +11,13 @@ the middle of an entrance of up to ``spacing`` blocks, and at the middles of equ
 so a straight way across an open hall bends by at most a few blocks at a border. A portal's block is a
 node; nodes in one sector are joined by their distance inside the sector, nodes facing each other across
 a border by one block. A decision searches this graph (a few nodes per sector instead of ``S * S``
-blocks) from the nodes within the robot's exact
-radius, keyed by its exact distances there, and reads a block's distance as the best over its sector's
-nodes plus the way inside the sector, searched for the sectors read only.
+blocks) from the nodes that the blocks the robot's exact search reached reach inside their sectors,
+and reads a block's distance as the best over its sector's nodes (and the robot's own seed blocks
+there) plus the way inside the sector, searched for the sectors read only.
 
 :class:`PortalGraph` keeps the nodes, the distances inside each sector and the edges across borders from
-decision to decision, and redoes them only for the sectors whose blocks changed and their four
-neighbours. Every distance it gives is the length of a real path of whole blocks, so never shorter than the
+decision to decision, and redoes them only for the sectors whose blocks changed and those neighbours
+whose portals moved. Every distance it gives is the length of a real path of whole blocks, so never shorter than the
 block search's; it is longer where the shortest way crosses a border off a portal.
 """
 
