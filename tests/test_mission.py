@@ -104,7 +104,7 @@ def test_far_distances_on_a_large_map_decide_a_corridor_as_exact_ones_do(sector:
     # A corridor with unknown at both ends; the robot at column 30 is 9 cells from the right end, beyond
     # an exact radius of 5 cells: its distance there is estimated on blocks of 2 x 2, its path searched.
     # Over every block (sector 0), on a portal graph of sectors of 2 blocks, and of 24 blocks: the whole
-    # map in one sector, no portal, where the cells the blocks leave unread are searched on their own.
+    # map in one sector, no portal, where the robot's own seed blocks reach the far cells inside it.
     state = state_grid("#" * 41 + "\n" + ("?" + "." * 39 + "?\n") * 3 + "#" * 41)
     robots = np.array([[2, 5], [2, 30]], np.int32)
     far_cfg = GlobalPlanningConfig(

@@ -56,9 +56,9 @@ def test_a_corridor_through_sectors_is_exact() -> None:
     blocks = np.zeros((12, 12), bool)
     blocks[5, :] = True  # one block wide: every way crosses each border at the portal
     g = graph_of(blocks, 4, 3)
-    ids, nb = g.nodes_in(0, 12, 0, 4)
-    src = ids[nb[:, 1] == 3]  # the node at the first border, block (5, 3)
-    field = g.search(src, np.zeros(1))
+    src = g.node_at[5, 3]  # the node at the first border
+    assert src >= 0
+    field = g.search(np.array([src]), np.zeros(1))
     got = field.values(np.array([[5, c] for c in range(12)]))
     np.testing.assert_allclose(got, np.abs(np.arange(12) - 3.0))
 

@@ -30,22 +30,9 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.paths.distance_field import _descend_to_seed, _seeded_search
+from mrexplore.paths.distance_field import _descend_to_seed, _seeded_search, _start_values
 
 __all__ = ["PortalField", "PortalGraph"]
-
-
-@nb.njit(cache=True, nogil=True)
-def _sector_start(G: np.ndarray, br0: int, bc0: int, S: int) -> np.ndarray:  # pragma: no cover - numba
-    """The sector of ``S`` x ``S`` blocks at block ``(br0, bc0)`` of ``G`` as a search starts it: padded
-    flat, ``inf`` where passable, ``-1`` elsewhere (:func:`~mrexplore.paths.distance_field._start_values`)."""
-    Wp = S + 2
-    start = np.full((S + 2) * Wp, np.float32(-1.0), dtype=np.float32)
-    for a in range(S):
-        for b in range(S):
-            if G[br0 + a, bc0 + b]:
-                start[(a + 1) * Wp + b + 1] = np.inf
-    return start
 
 
 @nb.njit(cache=True, nogil=True)
@@ -156,7 +143,7 @@ def _refresh(
         if n == 0:
             continue
         br0, bc0 = (slot // nsw) * S, (slot % nsw) * S
-        start = _sector_start(G, br0, bc0, S)
+        start = _start_values(G[br0 : br0 + S, bc0 : bc0 + S])
         for k in range(n):
             seed[0] = (nodes[slot, k, 0] - br0 + 1) * Wp + nodes[slot, k, 1] - bc0 + 1
             best = _seeded_search(start, Wp, seed, key, q_node, q_key)
@@ -354,7 +341,8 @@ def _fill(
     order = np.argsort(keys[:m], kind="mergesort")
     q_node = np.empty((2, S * S + 1), dtype=np.int32)
     q_key = np.empty((2, S * S + 1), dtype=np.float32)
-    best = _seeded_search(_sector_start(G, br0, bc0, S), Wp, cells[:m][order], keys[:m][order], q_node, q_key)
+    start = _start_values(G[br0 : br0 + S, bc0 : bc0 + S])
+    best = _seeded_search(start, Wp, cells[:m][order], keys[:m][order], q_node, q_key)
     return best.reshape((S + 2, Wp))[1:-1, 1:-1].copy(), seed_key
 
 
@@ -498,8 +486,6 @@ class PortalGraph:
         """Per sector, the longest way between two of its nodes (blocks)."""
         self._rows = _compact(self.n_nodes, self.intra, self.inter)
         """:func:`_compact` of the graph as it stands."""
-        self.redone = 0
-        """Sectors whose blocks changed at the last :meth:`refresh`."""
 
     @property
     def max_nodes(self) -> int:
@@ -522,7 +508,6 @@ class PortalGraph:
         grown[:, :-1] |= changed[:, 1:]
         dirty = np.flatnonzero(grown.ravel())
         self.grid = new
-        self.redone = int(changed.sum())
         if len(dirty):
             _refresh(
                 new,
@@ -539,24 +524,11 @@ class PortalGraph:
             )
             self._rows = _compact(self.n_nodes, self.intra, self.inter)
 
-    def nodes_in(self, br0: int, br1: int, bc0: int, bc1: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-        """The nodes whose blocks lie in rows ``[br0, br1)`` and columns ``[bc0, bc1)`` of the map's blocks:
-        ``(k,) int64`` node ids and ``(k, 2) int64`` their blocks."""
-        S = self.S
-        si = np.arange(max(0, br0 // S), min(self.nsh, -(-br1 // S)))
-        sj = np.arange(max(0, bc0 // S), min(self.nsw, -(-bc1 // S)))
-        slots = (si[:, None] * self.nsw + sj[None, :]).ravel()
-        counts = self.n_nodes[slots]
-        k = np.concatenate([np.arange(n) for n in counts]) if len(slots) else np.zeros(0, np.int64)
-        owner = np.repeat(slots, counts)
-        blocks = self.nodes[owner, k]
-        inside = (blocks[:, 0] >= br0) & (blocks[:, 0] < br1) & (blocks[:, 1] >= bc0) & (blocks[:, 1] < bc1)
-        return (owner * self.max_nodes + k)[inside], blocks[inside]
-
     def search(self, seed_ids: NDArray[np.int64], seed_keys: NDArray[np.floating]) -> PortalField:
         """Distances from nodes ``seed_ids`` at ``seed_keys`` (blocks) over the graph."""
         dist, parent = self._search(np.asarray(seed_ids, np.int64), np.asarray(seed_keys, np.float32))
-        return PortalField(self, dist, parent, _NO_SEEDS)
+        none = _Seeds(np.zeros(self.nsh * self.nsw + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.float32))
+        return PortalField(self, dist, parent, none)
 
     def _search(
         self, ids: NDArray[np.int64], keys: NDArray[np.float32]
@@ -598,17 +570,11 @@ class _Seeds(NamedTuple):
     keys: NDArray[np.float32]
 
 
-_NO_SEEDS = _Seeds(np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.float32))
-
-
 class PortalField:
     """One source's distances over a :class:`PortalGraph`: at its nodes, and at any block, in blocks."""
 
     def __init__(self, graph: PortalGraph, dist: NDArray[np.float32], parent: NDArray[np.int64], seeds: _Seeds) -> None:
         self.graph, self.dist, self.parent = graph, dist, parent
-        n_slots = graph.nsh * graph.nsw
-        if len(seeds.first) < n_slots + 1:  # no seed blocks: every sector's range is empty
-            seeds = _Seeds(np.zeros(n_slots + 1, np.int64), seeds.cells, seeds.keys)
         self.seeds = seeds
         self._where = np.full(graph.nsh * graph.nsw, -1, dtype=np.int64)
         """Per sector, its place in :attr:`_store` (``-1``: not searched yet)."""
