@@ -72,6 +72,22 @@ def test_sampling_keeps_spacing_and_covers_every_frontier_cell() -> None:
     assert reach.max() < 5.0  # greedy: a cell was dropped only for a kept cell within the spacing
 
 
+@settings(max_examples=60, deadline=None)
+@given(
+    cells=st.lists(st.tuples(st.integers(-30, 60), st.integers(-30, 60)), max_size=200),
+    spacing=st.sampled_from([0.5, 1.0, 2.5, 5.0, 10.000000000000002]),
+)
+def test_sampling_is_the_greedy_pass_over_the_cells_in_order(cells: list[tuple[int, int]], spacing: float) -> None:
+    # The buckets only make the greedy pass fast: keep a cell when no kept cell lies closer than the
+    # spacing, checked here against every kept cell.
+    kept: list[tuple[int, int]] = []
+    for r, c in cells:
+        if all((r - a) ** 2 + (c - b) ** 2 >= spacing**2 for a, b in kept):
+            kept.append((r, c))
+    got = sample_tasks(np.array(cells, dtype=np.int64).reshape(-1, 2), spacing)
+    assert got.dtype == np.int32 and [tuple(x) for x in got.tolist()] == kept
+
+
 def test_cap_drops_the_farthest_and_the_unreachable() -> None:
     assert cap_tasks(np.array([9.0, 1.0, np.inf, 4.0, 2.0]), 3).tolist() == [1, 3, 4]
 
@@ -192,8 +208,8 @@ def test_near_far_coscan_decides_a_long_corridor_as_the_exact_one_does() -> None
 def test_near_far_coscan_tours_a_far_cluster_as_the_exact_one_does() -> None:
     # Unknown above the left end of a corridor: frontier cells (2, 1..9), tasks 0.5 m (2.5 cells) apart at
     # columns 1, 4, 7, one cluster round the middle one (each within delta). The robot is 28 cells from
-    # the nearest, beyond the exact radius (5 cells): both tour the cluster from column 7. Near/far
-    # searched one task row, the centroid's (task 1); the tour's distances come from the cluster's box.
+    # the nearest, beyond the exact radius (5 cells): both tour the cluster from column 7. Each searched
+    # one task row, the centroid's (task 1); the tour's distances come from searches between the tasks.
     from mrexplore.config import GlobalPlanningConfig
 
     state = state_grid("""
@@ -206,7 +222,8 @@ def test_near_far_coscan_tours_a_far_cluster_as_the_exact_one_does() -> None:
     robots = np.array([[3, 35]], np.int32)
     far_cfg = GlobalPlanningConfig(far_above_cells=0, exact_radius_m=1.0, coarse_cell_m=0.4)
     exact, far = make_strategy("coscan"), make_strategy("coscan", far_cfg)
-    d_exact = exact.decide(state, robots, 0.2)
+    exact_posed = exact.pose(state, robots, 0.2)
+    d_exact = exact.finish(exact_posed, exact.assign(exact_posed))
     posed = far.pose(state, robots, 0.2)
     d_far = far.finish(posed, far.assign(posed))
     assert d_exact.clusters.members_rc.tolist() == d_far.clusters.members_rc.tolist() == [[2, 1], [2, 4], [2, 7]]
@@ -215,6 +232,9 @@ def test_near_far_coscan_tours_a_far_cluster_as_the_exact_one_does() -> None:
     assert [p.tolist() for p in d_far.paths] == [p.tolist() for p in d_exact.paths]
     assert posed.work is not None and posed.work.candidates is not None
     assert sorted(posed.work.candidates.context.rows.cache) == [1]
+    # The exact searches too read the centroid's row alone; the tour's come from searches between its tasks.
+    assert exact_posed.work is not None and exact_posed.work.candidates is not None
+    assert sorted(exact_posed.work.candidates.context.rows.cache) == [1]
 
 
 def test_near_far_tour_distances_leave_the_clusters_box_through_near_far_rows() -> None:

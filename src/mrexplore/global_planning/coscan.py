@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
@@ -40,24 +41,44 @@ def sample_tasks(frontier_rc: NDArray[np.integer], spacing_cells: float) -> NDAr
     >>> sample_tasks(np.array([[0, c] for c in range(12)]), 5).tolist()
     [[0, 0], [0, 5], [0, 10]]
     """
-    pts = np.asarray(frontier_rc, dtype=np.int64)
-    kept: list[tuple[int, int]] = []
-    buckets: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    pts = np.asarray(frontier_rc, dtype=np.int64).reshape(-1, 2)
+    if len(pts) == 0:
+        return np.zeros((0, 2), dtype=np.int32)
     s = max(float(spacing_cells), 1e-9)
-    s2 = spacing_cells * spacing_cells
-    for r, c in pts:
-        br, bc = int(r // s), int(c // s)
-        near = (
-            q
-            for dr in (-1, 0, 1)
-            for dc in (-1, 0, 1)
-            for q in buckets.get((br + dr, bc + dc), ())
-            if (q[0] - r) ** 2 + (q[1] - c) ** 2 < s2
-        )
-        if next(near, None) is None:
-            kept.append((int(r), int(c)))
-            buckets.setdefault((br, bc), []).append((int(r), int(c)))
-    return np.array(kept, dtype=np.int32).reshape(-1, 2)
+    low = np.floor_divide(pts.min(axis=0), s).astype(np.int64) - 1  # a bucket ring round the cells
+    high = np.floor_divide(pts.max(axis=0), s).astype(np.int64) + 1
+    kept = _sample(pts, s, float(spacing_cells) ** 2, int(low[0]), int(low[1]), int(high[0]), int(high[1]))
+    return pts[kept].astype(np.int32)
+
+
+@nb.njit(cache=True)
+def _sample(
+    pts: np.ndarray, s: float, s2: float, br0: int, bc0: int, br1: int, bc1: int
+) -> np.ndarray:  # pragma: no cover - numba
+    """Indices of the kept cells, in order. Each bucket's kept cells form a linked list (``head``, ``nxt``)."""
+    head = np.full((br1 - br0 + 1, bc1 - bc0 + 1), -1, dtype=np.int64)
+    nxt = np.full(len(pts), -1, dtype=np.int64)
+    kept = np.empty(len(pts), dtype=np.int64)
+    n = 0
+    for i in range(len(pts)):
+        r = pts[i, 0]
+        c = pts[i, 1]
+        br = int(np.floor(r / s)) - br0
+        bc = int(np.floor(c / s)) - bc0
+        near = False
+        for dr in range(-1, 2):
+            for dc in range(-1, 2):
+                j = head[br + dr, bc + dc]
+                while j >= 0 and not near:
+                    if (pts[j, 0] - r) ** 2 + (pts[j, 1] - c) ** 2 < s2:
+                        near = True
+                    j = nxt[j]
+        if not near:
+            kept[n] = i
+            n += 1
+            nxt[i] = head[br, bc]
+            head[br, bc] = i
+    return kept[:n]
 
 
 def cap_tasks(nearest_robot_dist: NDArray[np.floating], max_tasks: int) -> NDArray[np.int64]:
@@ -144,9 +165,9 @@ def lloyd_clusters(
         groups = [np.flatnonzero(labels == k) for k in range(len(centroid_dist))]
         new = [_snap(g, pts) for g in groups if len(g)]
         groups = [g for g in groups if len(g)]
-        # Split: a cluster reaching farther than delta from its centroid gives its farthest task away.
-        for c, g in zip(list(new), groups, strict=True):
-            row = rows(np.array([c]))[0]
+        # Split: a cluster reaching farther than delta from its centroid gives its farthest task away. Every
+        # centroid's row is read, so they are asked for at once (rows searched on demand share the threads).
+        for c, g, row in zip(list(new), groups, rows(np.asarray(new, np.int64)), strict=True):
             far = g[np.argmax(row[g])]
             if row[far] > delta_cells:
                 new.append(int(far))
