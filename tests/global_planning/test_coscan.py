@@ -184,6 +184,20 @@ def test_a_new_strategy_supplies_candidates_without_touching_the_decision() -> N
     assert d.paths[0][0].tolist() == [2, 6] and d.paths[0][-1].tolist() == [1, 7]
 
 
+def test_coscan_robot_fields_stop_once_they_reach_the_tasks() -> None:
+    # Unknown only at the left end of a closed corridor: the tasks lie in column 1. The robot in column 5
+    # needs nothing beyond them, so its search stops there: the far end (23 cells away) reads inf. Whole
+    # fields, which CoScan-2D searched before, read 23 there.
+    state = state_grid("#" * 30 + "\n" + ("?" + "." * 28 + "#\n") * 2 + "#" * 30)
+    robots = np.array([[1, 5]], np.int32)
+    posed = make_strategy("coscan").pose(state, robots, 0.2)
+    assert posed.work is not None and posed.work.candidates is not None
+    assert posed.work.candidates.context.tasks_rc.tolist() == [[1, 1]]
+    field = posed.work.fields[0]
+    assert field.value(1, 1) == 4.0 and field.value(1, 5) == 0.0
+    assert field.value(1, 28) == np.inf
+
+
 def test_near_far_coscan_decides_a_long_corridor_as_the_exact_one_does() -> None:
     # A corridor 39 cells long, unknown at both ends, one robot near the left end: tasks at both ends,
     # farther apart than delta (2 m = 10 cells at 0.2 m), so two clusters; the robot takes the nearer.
