@@ -19,6 +19,7 @@ from mrexplore.global_planning.coscan import (
     TaskRows,
     cap_tasks,
     lloyd_clusters,
+    matrix_rows,
     sample_tasks,
     two_opt_tour,
 )
@@ -517,12 +518,11 @@ class _CoScanTasks:
     far: FarDistances | None
 
     def between(self, members: NDArray[np.int64]) -> NDArray[np.float64]:
-        """``(k, k)`` distances between the tasks ``members``: on a map searched exactly, searches between
-        the members alone, each stopped once it has reached the members after it (a cluster spans about
-        ``2 delta_m``); on a near/far map, the same on the members' box grown by the exact radius, rows of
-        near/far fields for the pairs whose way leaves that box."""
+        """``(k, k)`` distances between the tasks ``members``: rows of the whole matrix on a map searched
+        exactly; on a near/far map, exact searches on the members' box grown by the exact radius (a cluster
+        spans about ``2 delta_m``), rows of near/far fields for the pairs whose way leaves that box."""
         if self.far is None:
-            return pairwise_distances(self.passable, self.tasks_rc[members])
+            return self.rows(members)[:, members]
         pts = self.tasks_rc[members].astype(np.int64)
         (r0, c0), (r1, c1) = pts.min(axis=0), pts.max(axis=0) + 1
         rows, cols = grown_slices((r0, r1, c0, c1), self.far.radius_cells, self.passable.shape)
@@ -532,27 +532,6 @@ class _CoScanTasks:
             lost = np.flatnonzero(gone.any(axis=1))
             d[lost] = np.where(gone[lost], self.rows(members[lost])[:, members], d[lost])
         return np.minimum(d, d.T)
-
-
-class _ExactRows:
-    """Task-to-task distances on a map searched exactly, a row per task searched when first read: Lloyd
-    reads its centroids' rows only (23.5 of 48 tasks' a decision on KTH 50052750 at 0.05 m with 8 robots),
-    and a tour's distances come from searches between its cluster's tasks (:meth:`_CoScanTasks.between`).
-    A whole matrix was 48 searches a decision, each to every task: 70% of CoScan-2D's time there.
-
-    Row i is task i's search read at every task (the whole matrix was made symmetric by the smaller of
-    the two ways' float32 sums, which can differ in the last place)."""
-
-    def __init__(self, passable: BoolGrid, tasks_rc: NDArray[np.int32]) -> None:
-        self.passable, self.tasks = passable, tasks_rc
-        self.cache: dict[int, NDArray[np.float64]] = {}
-
-    def __call__(self, idx: NDArray[np.int64]) -> NDArray[np.float64]:
-        new = [i for i in dict.fromkeys(np.asarray(idx).tolist()) if i not in self.cache]
-        if new:
-            for i, row in zip(new, distance_matrix(self.passable, self.tasks[new], self.tasks), strict=True):
-                self.cache[i] = row
-        return np.stack([self.cache[int(i)] for i in idx]).reshape(len(idx), len(self.tasks))
 
 
 class _NearFarRows:
@@ -600,8 +579,8 @@ class CoScanPipeline(ExplorationPipeline):
     Tasks come from F_un components of at least ``min_cluster_size`` cells (the other strategies' noise
     rule), so every strategy ends on the same frontiers. Where the known passable box holds more than
     ``far_above_cells`` (the KTH floors at 0.05 m), distances beyond ``exact_radius_m`` are estimated as
-    for every other strategy. Only the task-to-task rows Lloyd reads are searched, and a tour's distances
-    between its own tasks.
+    for every other strategy, and only the task-to-task rows Lloyd reads are searched. Elsewhere the
+    whole matrix between the tasks is searched, and the robots' searches stop once they reach the tasks.
     """
 
     coscan: CoScanConfig = field(default_factory=CoScanConfig)
@@ -620,7 +599,16 @@ class CoScanPipeline(ExplorationPipeline):
         if len(keep) == 0:
             return CandidateSet(Clusters.empty(), "no_reachable_frontiers")
         tasks, d_robots = tasks[keep], d_robots[:, keep]
-        rows: TaskRows = _ExactRows(passable, tasks) if q.far is None else _NearFarRows(passable, tasks, q.far)
+        rows: TaskRows
+        if q.far is None:
+            # The whole matrix, made symmetric by the smaller of each pair's two float32 sums. Searching only
+            # the rows Lloyd reads (about half) was tried: the rows then differ in the last place, and 27 of
+            # 42 KTH missions parted, 2.8% [0.3, 6.5] more steps (docs/speed.md, "CoScan-2D's searches").
+            d_tasks = distance_matrix(passable, tasks, tasks)
+            d_tasks = np.minimum(d_tasks, d_tasks.T)  # equal up to float rounding; keep it symmetric
+            rows = matrix_rows(d_tasks)
+        else:
+            rows = _NearFarRows(passable, tasks, q.far)
         lloyd = lloyd_clusters(tasks, rows, d_robots, self.coscan.delta_m / q.resolution_m, self.coscan.max_iterations)
         sizes = np.bincount(lloyd.labels, minlength=len(lloyd.centroids)).astype(np.int32)
         clusters = Clusters(tasks[lloyd.centroids], sizes, tasks, lloyd.labels.astype(np.int32))
