@@ -46,11 +46,12 @@ def main(argv: list[str] | None = None) -> int:
     per_strategy: dict[str, float] = defaultdict(float)
     measured: dict[str, int] = defaultdict(int)
     missing = [f"{m} {s}" for m in maps for s in wanted if (m, s) not in walls]
-    for (m, s), ws in walls.items():
+    for (_m, s), ws in walls.items():
         per_strategy[s] += statistics.mean(ws) * args.seeds
         measured[s] += len(ws)
     total = sum(per_strategy.values())
-    print(f"{len(maps)} maps, {len(episodes)} episodes measured; projected for {args.seeds} seeds on {args.workers} workers\n")
+    print(f"{len(maps)} maps, {len(episodes)} episodes measured; projected for {args.seeds} seeds", end="")
+    print(f" on {args.workers} workers\n")
     print("| strategy | episodes measured | worker-minutes projected | share |")
     print("| --- | --- | --- | --- |")
     for s in wanted:

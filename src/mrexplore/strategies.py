@@ -351,12 +351,10 @@ class ExplorationPipeline:
 
         def fields_now(read_rc: NDArray[np.int32] | None = None) -> list[RobotField]:
             if not computed:
-                if far is None and read_rc is None:
-                    computed.append(list(distance_fields(passable, robots_rc, box=box)))
-                elif far is None:
+                if far is None:
                     # The strategy's cells are its candidates' members and centres; each search stops once
                     # it has them, the robots and the current goals (all the decision reads).
-                    targets = np.vstack([read_rc, robots_rc, *goals])
+                    targets = None if read_rc is None else np.vstack([read_rc, robots_rc, *goals])
                     computed.append(list(distance_fields(passable, robots_rc, targets, box=box)))
                 else:
                     own = None if read_rc is None else [read_rc] * len(robots_rc)

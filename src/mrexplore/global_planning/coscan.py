@@ -167,7 +167,7 @@ def lloyd_clusters(
         groups = [g for g in groups if len(g)]
         # Split: a cluster reaching farther than delta from its centroid gives its farthest task away. Every
         # centroid's row is read, so they are asked for at once (rows searched on demand share the threads).
-        for c, g, row in zip(list(new), groups, rows(np.asarray(new, np.int64)), strict=True):
+        for g, row in zip(groups, rows(np.asarray(new, np.int64)), strict=True):
             far = g[np.argmax(row[g])]
             if row[far] > delta_cells:
                 new.append(int(far))
