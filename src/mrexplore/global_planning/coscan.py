@@ -44,7 +44,7 @@ def sample_tasks(frontier_rc: NDArray[np.integer], spacing_cells: float) -> NDAr
     pts = np.asarray(frontier_rc, dtype=np.int64).reshape(-1, 2)
     if len(pts) == 0:
         return np.zeros((0, 2), dtype=np.int32)
-    s = max(float(spacing_cells), 1e-9)
+    s = max(float(spacing_cells), 1.0)  # buckets no smaller than a cell: finer ones only cost memory
     low = np.floor_divide(pts.min(axis=0), s).astype(np.int64) - 1  # a bucket ring round the cells
     high = np.floor_divide(pts.max(axis=0), s).astype(np.int64) + 1
     kept = _sample(pts, s, float(spacing_cells) ** 2, int(low[0]), int(low[1]), int(high[0]), int(high[1]))
