@@ -406,6 +406,17 @@ def _node_seeds(
 
 
 @nb.njit(cache=True, nogil=True)
+def _room(out: np.ndarray, n: int, k: int) -> np.ndarray:  # pragma: no cover - numba
+    """``out`` (rows of blocks, the first ``n`` in use) with room for ``k`` more: itself, or a copy twice
+    as large as needed."""
+    if n + k <= out.shape[0]:
+        return out
+    grown = np.empty((2 * (n + k), 2), dtype=np.int64)
+    grown[:n] = out[:n]
+    return grown
+
+
+@nb.njit(cache=True, nogil=True)
 def _chain(
     G: np.ndarray, S: int, nodes: np.ndarray, n_nodes: np.ndarray, parent: np.ndarray, u: int
 ) -> tuple[np.ndarray, int]:  # pragma: no cover - numba
@@ -432,19 +443,13 @@ def _chain(
                 f, G[br0 : br0 + S, bc0 : bc0 + S], key, nodes[slot, u % m, 0] - br0, nodes[slot, u % m, 1] - bc0
             )
             k = way.shape[0] - 1
-            if n + k > out.shape[0]:
-                grown = np.empty((2 * (n + k), 2), dtype=np.int64)
-                grown[:n] = out[:n]
-                out = grown
+            out = _room(out, n, k)
             for i in range(k):
                 out[n + i, 0] = way[i + 1, 0] + br0
                 out[n + i, 1] = way[i + 1, 1] + bc0
             n += k
         else:
-            if n + 1 > out.shape[0]:
-                grown = np.empty((2 * (n + 1), 2), dtype=np.int64)
-                grown[:n] = out[:n]
-                out = grown
+            out = _room(out, n, 1)
             out[n, 0] = nodes[p // m, p % m, 0]
             out[n, 1] = nodes[p // m, p % m, 1]
             n += 1
@@ -527,7 +532,7 @@ class PortalGraph:
     def search(self, seed_ids: NDArray[np.int64], seed_keys: NDArray[np.floating]) -> PortalField:
         """Distances from nodes ``seed_ids`` at ``seed_keys`` (blocks) over the graph."""
         dist, parent = self._search(np.asarray(seed_ids, np.int64), np.asarray(seed_keys, np.float32))
-        none = _Seeds(np.zeros(self.nsh * self.nsw + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.float32))
+        none = _SectorSeeds(np.zeros(self.nsh * self.nsw + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.float32))
         return PortalField(self, dist, parent, none)
 
     def _search(
@@ -555,13 +560,13 @@ class PortalGraph:
         order = np.argsort(slot, kind="stable")
         slot, b, k = slot[order], b[order], k[order]
         first = np.searchsorted(slot, np.arange(self.nsh * self.nsw + 1)).astype(np.int64)
-        seeds = _Seeds(first, ((b[:, 0] % S) * S + b[:, 1] % S).astype(np.int64), k)
+        seeds = _SectorSeeds(first, ((b[:, 0] % S) * S + b[:, 1] % S).astype(np.int64), k)
         ids, node_keys = _node_seeds(self.grid, S, self.nodes, self.n_nodes, *seeds, np.unique(slot))
         dist, parent = self._search(ids, node_keys)
         return PortalField(self, dist, parent, seeds)
 
 
-class _Seeds(NamedTuple):
+class _SectorSeeds(NamedTuple):
     """A source's own seed blocks by sector: those of sector ``s`` are ``cells[first[s] : first[s + 1]]``
     (``a S + b`` inside the sector) at ``keys`` (blocks)."""
 
@@ -573,7 +578,9 @@ class _Seeds(NamedTuple):
 class PortalField:
     """One source's distances over a :class:`PortalGraph`: at its nodes, and at any block, in blocks."""
 
-    def __init__(self, graph: PortalGraph, dist: NDArray[np.float32], parent: NDArray[np.int64], seeds: _Seeds) -> None:
+    def __init__(
+        self, graph: PortalGraph, dist: NDArray[np.float32], parent: NDArray[np.int64], seeds: _SectorSeeds
+    ) -> None:
         self.graph, self.dist, self.parent = graph, dist, parent
         self.seeds = seeds
         self._where = np.full(graph.nsh * graph.nsw, -1, dtype=np.int64)
