@@ -51,6 +51,15 @@ def test_json_run_prints_exactly_one_object(capsys) -> None:
     assert rec["map"] == "generated:3" and rec["robots"] == 2 and rec["coverage"] >= 0.99
 
 
+def test_no_baseline_bytes_leaves_the_grid_fields_out(capsys) -> None:
+    assert main(["explore", *FAST, "--json", "--no-baseline-bytes"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    assert rec["config"]["mission"]["baseline_bytes"] is False and rec["bytes_sparse"] > 0
+    assert (rec["bytes_grid"], rec["bytes_grid_zlib"], rec["bytes_grid_delta_zlib"]) == (None, None, None)
+    assert main(["explore", *FAST, "--no-baseline-bytes"]) == 0
+    assert "; grid not counted, zlib not counted; " in capsys.readouterr().out
+
+
 def test_human_summary_and_pictures(tmp_path, capsys) -> None:
     gif, png = tmp_path / "run.gif", tmp_path / "final.png"
     assert main(["explore", *FAST, "--gif", str(gif), "--png", str(png)]) == 0

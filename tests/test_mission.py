@@ -172,6 +172,28 @@ def test_baseline_bytes_counted_on_threads_equal_those_counted_inline(small_map,
     assert one["bytes_grid_zlib"] > 0 and two == one
 
 
+def test_a_mission_without_the_grid_baselines_is_the_same_mission(small_map) -> None:
+    # Table II's int8-grid baselines are accounting only: left out, every record but the timings and the
+    # three grid fields is the same, and those read None (empty in a bench's CSV), not 0.
+    from dataclasses import replace
+
+    cfg = MissionConfig()
+    runs = [
+        run_mission(small_map, make_strategy(s), SimConfig(robots=3), replace(cfg, baseline_bytes=b), seed=1)
+        for s in ("utility", "coscan")
+        for b in (True, False)
+    ]
+    grids = ("bytes_grid", "bytes_grid_zlib", "bytes_grid_delta_zlib")
+    for counted, left_out in (runs[:2], runs[2:]):
+        a, b = (r.measures.to_dict() for r in (counted, left_out))
+        assert all(a[k] > 0 for k in grids) and all(b[k] is None for k in grids)
+        assert {k: v for k, v in a.items() if k not in TIMING_KEYS | set(grids)} == {
+            k: v for k, v in b.items() if k not in TIMING_KEYS | set(grids)
+        }
+        assert np.array_equal(counted.coverage_curve, left_out.coverage_curve)
+        assert np.array_equal(counted.final_state, left_out.final_state)
+
+
 @pytest.mark.parametrize(("commitment", "goal"), [(1.0, [2, 7]), (0.4, [2, 1])])
 def test_commitment_keeps_a_robot_on_its_goal(commitment: float, goal: list[int]) -> None:
     # The robot at (2, 5) heads for the left end (4 cells away); the right end is 2 cells away.

@@ -55,6 +55,10 @@ MIN_REPLAN_HELP = (
     "steps a robot whose goal was seen drives on before the team replans "
     f"(default {MissionConfig.min_replan_steps}; 1: at once)"
 )
+BASELINE_BYTES_HELP = (
+    "leave Table II's int8-grid baselines uncounted (bytes_grid* empty): the same missions, a large floor's "
+    "rounds much cheaper, for runs that want Table I alone"
+)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -209,6 +213,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="what the centre rebuilds from: sparse-map deltas (default) or whole sparse maps (the paper's)",
     )
+    ex.add_argument("--no-baseline-bytes", action="store_true", help=BASELINE_BYTES_HELP)
     ex.add_argument("--json", action="store_true", help="print one JSON object with the measures on stdout")
     _add_config_flags(ex, "flags override it")
     _add_progress(ex)
@@ -236,6 +241,7 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"step budget per episode (default {MissionConfig.max_steps})",
     )
     be.add_argument("--min-replan-steps", type=_COUNT, default=None, help=MIN_REPLAN_HELP)
+    be.add_argument("--no-baseline-bytes", action="store_true", help=BASELINE_BYTES_HELP)
     _add_config_flags(be, "flags override it; the resume key holds every setting")
     _add_progress(be)
     tr = sub.add_parser(
@@ -295,6 +301,8 @@ def _run_config(args: argparse.Namespace) -> RunConfig:
     given = vars(args)
     flags = {"max_steps": "max_steps", "min_replan_steps": "min_replan_steps", "transmission": "transmission"}
     mission = replace(mission, **{f: given[a] for a, f in flags.items() if given.get(a) is not None})
+    if given.get("no_baseline_bytes"):
+        mission = replace(mission, baseline_bytes=False)
     map_cfg = run.map
     if given.get("resolution") is not None:
         map_cfg = replace(map_cfg, resolution_m=args.resolution)
@@ -480,8 +488,8 @@ def strict_json(value: Any) -> Any:
     return value
 
 
-def _kb(n: int) -> str:
-    return f"{n / 1e3:.1f} kB"
+def _kb(n: int | None) -> str:
+    return "not counted" if n is None else f"{n / 1e3:.1f} kB"
 
 
 def _summary(rec: dict[str, Any]) -> str:

@@ -454,6 +454,11 @@ class MissionConfig(_Checked):
     transmission: str = "delta"
     """What the centre rebuilds its grid from: ``delta`` (changes since the last acknowledged sparse
     frontier map) or ``full`` (the whole sparse map every round, the paper's). Same grid, fewer bytes."""
+    baseline_bytes: bool = True
+    """Count what Table II's int8-grid baselines would have sent (``bytes_grid``, ``bytes_grid_zlib``,
+    ``bytes_grid_delta_zlib``): every robot's known box and its changed cells, zlib-compressed every round,
+    work neither a robot nor the centre does. False leaves those fields empty, for runs that want Table I
+    alone: the missions are the same step for step, and the sparse maps' bytes are counted either way."""
     oscillation_radius_m: float = 2.0
     """A new goal within this distance of a goal the robot gave up before reaching it (still a frontier)
     is a return to it, metres, > 0."""

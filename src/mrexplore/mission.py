@@ -164,6 +164,7 @@ class Mission:
             faults.message_loss,
             np.random.default_rng([seed, _LINK_STREAM]),
             faults.silence_rounds,
+            mission_cfg.baseline_bytes,
         )
         self._restarts = sorted(faults.centre_restarts)
         self._failures = sorted((step, robot) for robot, step in faults.robot_failures)

@@ -63,6 +63,17 @@ def test_bytes_table_reductions() -> None:
     assert bytes_table([row("hier", 10, bytes_grid_delta_zlib="400")]).splitlines()[2].split(" | ")[10] == "25.00% ↑"
 
 
+def test_bytes_table_without_the_grid_baselines() -> None:
+    # A run with --no-baseline-bytes leaves the grid fields empty: the sparse columns and the IoU stay,
+    # every grid column and every reduction against a grid reads '–'.
+    none = {"bytes_grid": "", "bytes_grid_zlib": "", "bytes_grid_delta_zlib": ""}
+    line = bytes_table([row("hier", 10, **none), row("hier", 10, bytes_sparse="2000", **none)]).splitlines()[2]
+    assert line == "| houseexpo small | 2 | – | – | – | 3.0 | 0.5 | – | – | – | – | 0.9900 | 0.99900 |"
+    # A group that mixes counted and uncounted rows is not averaged over the counted ones alone.
+    mixed = bytes_table([row("hier", 10), row("hier", 10, **none)]).splitlines()[2]
+    assert mixed.split(" | ")[2:5] == ["–", "–", "–"]
+
+
 def test_bound_ratio() -> None:
     assert "| hier | 1.80× |" in bound_table([row("hier", 80), row("hier", 100)], ["hier"])
 

@@ -17,6 +17,7 @@ from mrexplore.bench.runner import (
     COLUMNS,
     EpisodeSpec,
     _area_hint,
+    _settings_dict,
     dataset_of,
     drop_partial_tail,
     expand_maps,
@@ -217,6 +218,24 @@ def test_the_resume_key_holds_the_resolved_map_and_the_settings(tmp_path, monkey
     faulty = RunConfig(map=FAST["run"].map, mission=MissionConfig(max_steps=3000, faults=FaultConfig(message_loss=0.1)))
     assert EpisodeSpec("m.png", "nearest", 2, 0, run=faulty).settings != a.settings
     assert EpisodeSpec("m.png", "hier", 2, 0, **FAST).policy_sha256 != "" and a.policy_sha256 == ""
+
+
+def test_a_bench_without_the_grid_baselines_keeps_its_own_key_and_leaves_them_empty(tmp_path) -> None:
+    # The setting came after benches were kept: at its default it stays out of the resume key, so their
+    # rows keep theirs; off, it is a setting of its own, and the rows leave the three grid fields empty.
+    assert "baseline_bytes" not in _settings_dict(RunConfig())["mission"]
+    off = RunConfig(mission=MissionConfig(baseline_bytes=False))
+    assert _settings_dict(off)["mission"]["baseline_bytes"] is False
+    assert (
+        EpisodeSpec("generated:1", "nearest", 2, 0, run=off).settings
+        != EpisodeSpec("generated:1", "nearest", 2, 0).settings
+    )
+    args = ["bench", "--maps", "generated:1", "--strategies", "nearest", "--seeds", "1", "--resolution", "0.2"]
+    assert main([*args, "--workers", "1", "--no-baseline-bytes", "--out", str(tmp_path)]) == 0
+    (rec,) = read_rows(tmp_path / "results.csv")
+    assert [rec[k] for k in ("bytes_grid", "bytes_grid_zlib", "bytes_grid_delta_zlib")] == ["", "", ""]
+    assert int(rec["bytes_sparse"]) > 0 and int(rec["steps"]) > 0
+    assert "| generated middle | 1 | – | – | – |" in (tmp_path / "report.md").read_text()
 
 
 def _children(pid: int) -> list[int]:

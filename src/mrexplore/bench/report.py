@@ -150,34 +150,41 @@ def _groups(rows: list[Row]) -> list[tuple[str, str]]:
 def bytes_table(rows: list[Row]) -> str:
     """Table II: per dataset and size class, mean kB sent per episode by each encoding, the reduction
     against the raw grid, the sparse delta against its generic competitor (the grid's changed cells since
-    the last acknowledged round, zlib; '–' for rows written before it was counted), and the centre map's
-    free-space IoU (lowest round, mean over rounds)."""
+    the last acknowledged round, zlib), and the centre map's free-space IoU (lowest round, mean over
+    rounds). '–' where a group's rows lack the grids: written before the delta was counted, or by a run
+    that left the grid baselines out (``--no-baseline-bytes``)."""
     lines = [
         "| scene | episodes | grid kB | grid zlib kB | grid delta zlib kB | sparse kB | sparse delta kB | "
         "sparse vs grid | delta vs grid | delta vs zlib | delta vs grid delta zlib | IoU min | IoU mean |",
         "|" + " --- |" * 13,
     ]
+
+    def mean_kb(sel: list[Row], key: str) -> float | None:
+        known = [float(r[key]) for r in sel if r.get(key)]
+        return float(np.mean(known)) / 1e3 if known and len(known) == len(sel) else None
+
+    def kb_text(v: float | None) -> str:
+        return "–" if v is None else f"{v:.1f}"
+
+    def versus(part: float, whole: float | None) -> str:
+        return "–" if whole is None else _reduction(part, whole)
+
     for dataset, cls in _groups(rows):
         sel = [r for r in rows if r["dataset"] == dataset and r["size_class"] == cls]
-        kb = {k: float(np.mean([float(r[k]) for r in sel])) / 1e3 for k in _BYTES}
-        known = [float(r["bytes_grid_delta_zlib"]) for r in sel if r.get("bytes_grid_delta_zlib")]
-        grid_delta = float(np.mean(known)) / 1e3 if len(known) == len(sel) else None
+        sparse, delta = (float(np.mean([float(r[k]) for r in sel])) / 1e3 for k in _SPARSE)
+        grid, grid_zlib, grid_delta = (mean_kb(sel, k) for k in _GRIDS)
         iou_min = min(float(r["reconstruction_iou_min"]) for r in sel)
         iou_mean = np.mean([float(r["reconstruction_iou_mean"]) for r in sel])
         lines.append(
-            f"| {dataset} {cls} | {len(sel)} | {kb['bytes_grid']:.1f} | {kb['bytes_grid_zlib']:.1f} | "
-            f"{'–' if grid_delta is None else f'{grid_delta:.1f}'} | "
-            f"{kb['bytes_sparse']:.1f} | {kb['bytes_sparse_delta']:.1f} | "
-            f"{_reduction(kb['bytes_sparse'], kb['bytes_grid'])} | "
-            f"{_reduction(kb['bytes_sparse_delta'], kb['bytes_grid'])} | "
-            f"{_reduction(kb['bytes_sparse_delta'], kb['bytes_grid_zlib'])} | "
-            f"{'–' if grid_delta is None else _reduction(kb['bytes_sparse_delta'], grid_delta)} | "
-            f"{iou_min:.4f} | {iou_mean:.5f} |"
+            f"| {dataset} {cls} | {len(sel)} | {kb_text(grid)} | {kb_text(grid_zlib)} | {kb_text(grid_delta)} | "
+            f"{sparse:.1f} | {delta:.1f} | {versus(sparse, grid)} | {versus(delta, grid)} | "
+            f"{versus(delta, grid_zlib)} | {versus(delta, grid_delta)} | {iou_min:.4f} | {iou_mean:.5f} |"
         )
     return "\n".join(lines)
 
 
-_BYTES = ("bytes_grid", "bytes_grid_zlib", "bytes_sparse", "bytes_sparse_delta")
+_SPARSE = ("bytes_sparse", "bytes_sparse_delta")
+_GRIDS = ("bytes_grid", "bytes_grid_zlib", "bytes_grid_delta_zlib")
 
 
 def _reduction(part: float, whole: float) -> str:

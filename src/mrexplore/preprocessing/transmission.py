@@ -294,11 +294,18 @@ class TransmissionTotals:
     bytes_resent: int = 0
     centre_restarts: int = 0
     iou: list[float] = field(default_factory=list)
+    grids_counted: bool = True
+    """The int8-grid baselines were counted (``bytes_grid``, ``bytes_grid_zlib``, ``bytes_grid_delta_zlib``);
+    False: they were not, and the record leaves them empty."""
 
-    def as_measures(self) -> dict[str, float | int]:
+    def as_measures(self) -> dict[str, float | int | None]:
         """Flat fields for an episode record."""
         iou = np.asarray(self.iou) if self.iou else np.ones(1)
-        counts = {k: v for k, v in asdict(self).items() if k != "iou"}
+        counts: dict[str, float | int | None] = {
+            k: v for k, v in asdict(self).items() if k not in ("iou", "grids_counted")
+        }
+        if not self.grids_counted:
+            counts.update(bytes_grid=None, bytes_grid_zlib=None, bytes_grid_delta_zlib=None)
         return {
             **counts,
             "reconstruction_iou_min": round(float(iou.min()), 6),
@@ -330,6 +337,9 @@ class TeamLink:
     message_loss:
         Probability that a message is lost, each way (robot to centre, and the centre's acknowledgement
         or request for a whole map back), drawn from ``rng``.
+    count_grids:
+        Count the int8-grid baselines of Table II too (False: their fields stay empty; nothing else
+        changes, and a round on a large floor costs much less).
 
     The protocol under loss: a robot sends its delta against the last map the centre acknowledged to it.
     A robot whose last message got no acknowledgement cannot tell a lost message (the centre holds its
@@ -349,6 +359,7 @@ class TeamLink:
         message_loss: float = 0.0,
         rng: np.random.Generator | None = None,
         silence_rounds: int = 3,
+        count_grids: bool = True,
     ) -> None:
         self.preprocess = preprocess
         self.sensor = sensor
@@ -357,7 +368,7 @@ class TeamLink:
         self.silence_rounds = silence_rounds
         self._rng = rng if rng is not None else np.random.default_rng(0)
         self.centre = CentreMap(n_robots, shape, preprocess.closing_size_cells)
-        self.totals = TransmissionTotals()
+        self.totals = TransmissionTotals(grids_counted=count_grids)
         self.senders = [RobotSender(i, shape) for i in range(n_robots)]
         self._last_heard = np.full(n_robots, -1, dtype=np.int64)
         self._positions = np.full((n_robots, 2), -1, dtype=np.int32)
@@ -452,13 +463,14 @@ class TeamLink:
             out = sender.send_onboard(grid, r, pos, window)
             data = out.incremental() if self.mode == "delta" else out.full_bytes()
             t1 = time.perf_counter()
-            key = (grid.state_version, window)
-            cached = self._grid_bytes[i]
-            if cached is None or cached[0] != key:
-                to_count.append((i, key, grid.state[window]))
-            else:
-                counted.append(i)
-            self.totals.bytes_grid_delta_zlib += sender.onboard_grid_delta_bytes(grid)
+            if self.totals.grids_counted:
+                key = (grid.state_version, window)
+                cached = self._grid_bytes[i]
+                if cached is None or cached[0] != key:
+                    to_count.append((i, key, grid.state[window]))
+                else:
+                    counted.append(i)
+                self.totals.bytes_grid_delta_zlib += sender.onboard_grid_delta_bytes(grid)
             sent.append(out)
             t2 = time.perf_counter()
             robot_s += t1 - t0

@@ -87,15 +87,17 @@ class EpisodeMeasures:
     viewpoints), or ``max_steps`` (budget ran out)."""
     rounds: int = 0
     """Communication rounds: every robot sent its map to the centre once per round (one per decision)."""
-    bytes_grid: int = 0
-    """Bytes the paper's baseline sends: each robot's int8 occupancy grid over its known bounding box."""
-    bytes_grid_zlib: int = 0
+    bytes_grid: int | None = 0
+    """Bytes the paper's baseline sends: each robot's int8 occupancy grid over its known bounding box (None
+    for a mission that did not count the grid baselines, ``mission.baseline_bytes: false``; the same for the
+    next two)."""
+    bytes_grid_zlib: int | None = 0
     """The same grids zlib-compressed (level 6)."""
     bytes_sparse: int = 0
     """Bytes of the sparse frontier maps (paper IV-A), whole every round."""
     bytes_sparse_delta: int = 0
     """Bytes of the incremental sparse maps (changes since the last acknowledged round)."""
-    bytes_grid_delta_zlib: int = 0
+    bytes_grid_delta_zlib: int | None = 0
     """The generic competitor of the sparse delta: the int8 grid's cells changed since the last
     acknowledged round (index gaps and values), zlib-compressed."""
     messages_sent: int = 0
