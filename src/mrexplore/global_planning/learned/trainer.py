@@ -169,7 +169,14 @@ def _mission(job: _Job, pipeline: ExplorationPipeline) -> Mission:
     truth = _map(job.map_spec, job.cfg.resolution_m)
     base = job.mission or MissionConfig()
     failures = tuple(f for f in base.faults.robot_failures if f[0] < job.robots)
-    cfg = replace(base, max_steps=job.cfg.max_steps, faults=replace(base.faults, robot_failures=failures))
+    # Training reads steps and areas, never Table II's bytes: their grid baselines are left uncounted (the
+    # same missions, cheaper rounds).
+    cfg = replace(
+        base,
+        max_steps=job.cfg.max_steps,
+        faults=replace(base.faults, robot_failures=failures),
+        baseline_bytes=False,
+    )
     sim = replace(job.sim or SimConfig(), robots=job.robots)
     return Mission(truth, pipeline, sim, cfg, seed=job.seed, progress=False)
 
