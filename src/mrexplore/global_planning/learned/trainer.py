@@ -781,6 +781,7 @@ def train(
     ``stages.csv``, ``curve.png``). ``minutes`` and ``episodes`` bound the run (the later stages are skipped).
     ``sim`` and ``mission`` set the episodes' sensor, motion, replanning and faults (None: defaults)."""
     env = {"sim": config_to_dict(sim or SimConfig()), "mission": config_to_dict(mission or MissionConfig())}
+    env["mission"].pop("baseline_bytes", None)  # rollouts never count them (:func:`_mission`): not a setting here
 
     def placed(jobs: list[_Job]) -> list[_Job]:
         return [replace(j, sim=sim, mission=mission) for j in jobs]
