@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from conftest import state_grid
@@ -175,8 +177,6 @@ def test_baseline_bytes_counted_on_threads_equal_those_counted_inline(small_map,
 def test_a_mission_without_the_grid_baselines_is_the_same_mission(small_map) -> None:
     # Table II's int8-grid baselines are accounting only: left out, every record but the timings and the
     # three grid fields is the same, and those read None (empty in a bench's CSV), not 0.
-    from dataclasses import replace
-
     cfg = MissionConfig()
     runs = [
         run_mission(small_map, make_strategy(s), SimConfig(robots=3), replace(cfg, baseline_bytes=b), seed=1)

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from mrexplore.bench.runner import parse_curve, read_rows
+from mrexplore.preprocessing.transmission import GRID_BASELINE_FIELDS
 
 __all__ = [
     "write_report",
@@ -172,7 +173,7 @@ def bytes_table(rows: list[Row]) -> str:
     for dataset, cls in _groups(rows):
         sel = [r for r in rows if r["dataset"] == dataset and r["size_class"] == cls]
         sparse, delta = (float(np.mean([float(r[k]) for r in sel])) / 1e3 for k in _SPARSE)
-        grid, grid_zlib, grid_delta = (mean_kb(sel, k) for k in _GRIDS)
+        grid, grid_zlib, grid_delta = (mean_kb(sel, k) for k in GRID_BASELINE_FIELDS)
         iou_min = min(float(r["reconstruction_iou_min"]) for r in sel)
         iou_mean = np.mean([float(r["reconstruction_iou_mean"]) for r in sel])
         lines.append(
@@ -184,7 +185,6 @@ def bytes_table(rows: list[Row]) -> str:
 
 
 _SPARSE = ("bytes_sparse", "bytes_sparse_delta")
-_GRIDS = ("bytes_grid", "bytes_grid_zlib", "bytes_grid_delta_zlib")
 
 
 def _reduction(part: float, whole: float) -> str:

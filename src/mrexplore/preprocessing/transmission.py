@@ -47,10 +47,13 @@ __all__ = [
     "TransmissionTotals",
     "occupancy_grid_bytes",
     "TRANSMISSION_MODES",
+    "GRID_BASELINE_FIELDS",
 ]
 
 TransmissionMode = Literal["delta", "full"]
 TRANSMISSION_MODES: tuple[TransmissionMode, ...] = ("delta", "full")
+GRID_BASELINE_FIELDS = ("bytes_grid", "bytes_grid_zlib", "bytes_grid_delta_zlib")
+"""The record's fields of Table II's int8-grid baselines: empty where a mission did not count them."""
 _ROS_VALUES = {CellState.FREE: 0, CellState.OCCUPIED: 100, CellState.UNKNOWN: -1}
 _ROS_LUT = np.zeros(len(CellState), dtype=np.int8)
 for _state, _value in _ROS_VALUES.items():
@@ -295,8 +298,8 @@ class TransmissionTotals:
     centre_restarts: int = 0
     iou: list[float] = field(default_factory=list)
     grids_counted: bool = True
-    """The int8-grid baselines were counted (``bytes_grid``, ``bytes_grid_zlib``, ``bytes_grid_delta_zlib``);
-    False: they were not, and the record leaves them empty."""
+    """The int8-grid baselines were counted (:data:`GRID_BASELINE_FIELDS`); False: they were not, and the
+    record leaves them empty."""
 
     def as_measures(self) -> dict[str, float | int | None]:
         """Flat fields for an episode record."""
@@ -305,7 +308,7 @@ class TransmissionTotals:
             k: v for k, v in asdict(self).items() if k not in ("iou", "grids_counted")
         }
         if not self.grids_counted:
-            counts.update(bytes_grid=None, bytes_grid_zlib=None, bytes_grid_delta_zlib=None)
+            counts.update(dict.fromkeys(GRID_BASELINE_FIELDS))
         return {
             **counts,
             "reconstruction_iou_min": round(float(iou.min()), 6),
