@@ -4,10 +4,11 @@
     python perf/team_ratio.py --runs ../docs/results/table005/teams --small 8 --large 16
 
 Reads the rows ``mrexplore bench --robots 8,16`` wrote (one or more folders; a later folder's episode
-replaces an earlier one's). Episodes are paired by map and seed: the same map, seed and first starts
-(a larger team's first robots start where the smaller team's do). The ratio is the large team's mean
-steps over the small team's, to 99% coverage and at the end; its 95% interval is the paired percentile
-bootstrap of ``mrexplore.bench.report.paired_bootstrap`` (resampling the pairs), read as a ratio.
+replaces an earlier one's). Episodes are paired by map and seed: the same map and seed, so the first robot
+starts on the same cell and the others within the same spread of it (``draw_starts``). The ratio is the
+large team's mean steps over the small team's, to 99% coverage and at the end; its 95% interval is the
+paired percentile bootstrap of ``mrexplore.bench.report.paired_bootstrap`` (resampling the pairs), read as a
+ratio.
 """
 
 from __future__ import annotations
