@@ -1,7 +1,7 @@
 """How many of a small team's steps a larger team needs, with a bootstrap interval over the seeds: issue 13's
 "16 robots need at most 0.6x the steps of 8 to reach 99% coverage".
 
-    python perf/team_ratio.py --runs ../docs/results/table005/teams --small 8 --large 16
+    python perf/team_ratio.py --runs docs/results/table005/teams --small 8 --large 16
 
 Reads the rows ``mrexplore bench --robots 8,16`` wrote (one or more folders; a later folder's episode
 replaces an earlier one's). Episodes are paired by map and seed: the same map and seed, so the first robot
@@ -17,16 +17,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from mrexplore.bench.report import paired_bootstrap
+from mrexplore.bench.report import paired_bootstrap, steps_of
 from mrexplore.bench.runner import read_rows
 
 METRICS = (("steps_to_99", "to 99%"), ("steps", "at the end"))
-
-
-def _steps(row: dict[str, str], metric: str) -> float:
-    """An episode's steps; one that never reached 99% counts with all its steps (as the bench report does)."""
-    value = row.get(metric, "")
-    return float(value) if value not in ("", "nan") else float(row["steps"])
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -54,8 +48,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"| metric | mean steps, {args.small} | mean steps, {args.large} | ratio [95% CI] | per pair |")
     print("| --- | --- | --- | --- | --- |")
     for metric, label in METRICS:
-        small = [_steps(episodes[m, args.small, s], metric) for m, s in pairs]
-        large = [_steps(episodes[m, args.large, s], metric) for m, s in pairs]
+        small = [steps_of(episodes[m, args.small, s], metric) for m, s in pairs]
+        large = [steps_of(episodes[m, args.large, s], metric) for m, s in pairs]
         est, lo, hi = paired_bootstrap(large, small)
         # paired_bootstrap gives % fewer steps than the small team; the ratio is 1 - that / 100.
         per = ", ".join(f"{b / a:.2f}" for a, b in zip(small, large, strict=True))

@@ -12,6 +12,7 @@ from mrexplore.preprocessing.transmission import GRID_BASELINE_FIELDS
 
 __all__ = [
     "write_report",
+    "steps_of",
     "steps_table",
     "bytes_table",
     "bound_table",
@@ -97,7 +98,7 @@ def paired_bootstrap(
     return float(round(est, 6)), float(round(lo, 6)), float(round(hi, 6))
 
 
-def _steps_of(row: Row, metric: str) -> float:
+def steps_of(row: Row, metric: str) -> float:
     """An episode's steps by ``metric`` (``steps``, or ``steps_to_99``: steps until 99% coverage; an episode
     that never got there counts with all its steps)."""
     value = row.get(metric, "")
@@ -135,7 +136,7 @@ def paired_table(
                 cells += ["–", "–", "0"]
                 continue
             est, lo, hi = paired_bootstrap(
-                [_steps_of(a, metric) for a, _ in pairs], [_steps_of(b, metric) for _, b in pairs]
+                [steps_of(a, metric) for a, _ in pairs], [steps_of(b, metric) for _, b in pairs]
             )
             cov = 100 * np.mean([float(a["coverage"]) - float(b["coverage"]) for a, b in pairs])
             cells += [f"{est:+.1f} [{lo:+.1f}, {hi:+.1f}]", f"{cov:+.2f}", str(len(pairs))]
