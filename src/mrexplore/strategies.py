@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -21,6 +22,7 @@ from mrexplore.global_planning.coscan import (
     lloyd_clusters,
     matrix_rows,
     sample_tasks,
+    tasks_in_reach,
     two_opt_tour,
 )
 from mrexplore.global_planning.ncm_nodes import ncm_frontier, pool_nodes
@@ -148,9 +150,12 @@ class FarDistances:
         sources_rc: NDArray[np.integer],
         must_rc: NDArray[np.integer] | None = None,
         own_rc: Sequence[NDArray[np.int32]] | None = None,
+        own_needed: Callable[[NDArray[np.float64]], NDArray[np.bool_]] | None = None,
     ) -> list[NearFarField]:
-        """One near/far field per source (``must_rc``, ``own_rc``: as :func:`far_fields`)."""
-        return far_fields(passable, sources_rc, self.radius_cells, self.grid.factor, must_rc, own_rc, self.grid)
+        """One near/far field per source (``must_rc``, ``own_rc``, ``own_needed``: as :func:`far_fields`)."""
+        return far_fields(
+            passable, sources_rc, self.radius_cells, self.grid.factor, must_rc, own_rc, self.grid, own_needed
+        )
 
 
 @dataclass(frozen=True)
@@ -165,11 +170,12 @@ class CandidateQuery:
     robots_rc: NDArray[np.int32]
     """``(n_robots, 2) int32`` the cells of the robots assigned to."""
     fields: Callable[..., list[RobotField]]
-    """``fields(read_rc=None)``: each robot's distances on the planning grid, computed once, on the first
-    call. Exact fields: whole ones, or with ``read_rc`` ``(k, 2)`` each search stopped once it has reached
-    those cells, the robots and the current goals (the candidates' cells must be among ``read_rc``). Near/far
-    fields where :attr:`far` is set, which answer the cells ``read_rc`` that their coarse grid leaves at
-    ``inf`` by an exact search from the robot (``own_rc`` of :func:`~mrexplore.paths.far_field.far_fields`)."""
+    """``fields(read_rc=None, needed=None)``: each robot's distances on the planning grid, computed once, on
+    the first call. Exact fields: whole ones, or with ``read_rc`` ``(k, 2)`` each search stopped once it has
+    reached those cells, the robots and the current goals (the candidates' cells must be among ``read_rc``).
+    Near/far fields where :attr:`far` is set, which answer the cells ``read_rc`` that their coarse grid leaves
+    at ``inf`` by an exact search from the robot (``own_rc`` of :func:`~mrexplore.paths.far_field.far_fields`),
+    only those that ``needed`` keeps where it is given (its ``own_needed``)."""
     current: Sequence[NDArray[np.int32]] | None
     """Each robot's current route (its goal first; empty for none)."""
     resolution_m: float
@@ -349,7 +355,10 @@ class ExplorationPipeline:
         box, far = self._extent(passable, resolution_m)
         goals = [r[:1] for r in current] if current is not None else []
 
-        def fields_now(read_rc: NDArray[np.int32] | None = None) -> list[RobotField]:
+        def fields_now(
+            read_rc: NDArray[np.int32] | None = None,
+            needed: Callable[[NDArray[np.float64]], NDArray[np.bool_]] | None = None,
+        ) -> list[RobotField]:
             if not computed:
                 if far is None:
                     # The strategy's cells are its candidates' members and centres; each search stops once
@@ -358,7 +367,7 @@ class ExplorationPipeline:
                     computed.append(list(distance_fields(passable, robots_rc, targets, box=box)))
                 else:
                     own = None if read_rc is None else [read_rc] * len(robots_rc)
-                    computed.append(list(far.fields(passable, robots_rc, own_rc=own)))
+                    computed.append(list(far.fields(passable, robots_rc, own_rc=own, own_needed=needed)))
             return computed[0]
 
         cand = self.candidates(
@@ -592,8 +601,12 @@ class CoScanPipeline(ExplorationPipeline):
         if len(tasks) == 0:
             return CandidateSet(Clusters.empty(), "no_frontiers")
         passable = q.state == CellState.FREE
-        d_robots = np.stack([distances_at(f, tasks) for f in q.fields(tasks)])
-        keep = cap_tasks(d_robots.min(axis=0), self.coscan.tasks_per_robot * n)
+        cap = self.coscan.tasks_per_robot * n
+        # On a near/far map a robot's task beyond the coarse grid costs a search of its own; a task that cannot
+        # be among the kept ones needs none (the kept tasks and their distances stay the same).
+        needed = partial(tasks_in_reach, robots_rc=q.robots_rc, tasks_rc=tasks, max_tasks=cap)
+        d_robots = np.stack([distances_at(f, tasks) for f in q.fields(tasks, needed)])
+        keep = cap_tasks(d_robots.min(axis=0), cap)
         if len(keep) == 0:
             return CandidateSet(Clusters.empty(), "no_reachable_frontiers")
         tasks, d_robots = tasks[keep], d_robots[:, keep]

@@ -10,7 +10,14 @@ from conftest import NARROW_GAP, bool_grid, state_grid
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mrexplore.global_planning.coscan import cap_tasks, lloyd_clusters, sample_tasks, tour_length, two_opt_tour
+from mrexplore.global_planning.coscan import (
+    cap_tasks,
+    lloyd_clusters,
+    sample_tasks,
+    tasks_in_reach,
+    tour_length,
+    two_opt_tour,
+)
 from mrexplore.strategies import make_strategy
 
 
@@ -90,6 +97,49 @@ def test_sampling_is_the_greedy_pass_over_the_cells_in_order(cells: list[tuple[i
 
 def test_cap_drops_the_farthest_and_the_unreachable() -> None:
     assert cap_tasks(np.array([9.0, 1.0, np.inf, 4.0, 2.0]), 3).tolist() == [1, 3, 4]
+
+
+def test_tasks_out_of_reach_by_hand() -> None:
+    # One robot at the origin, a cap of 2. Reads 3 and 6 are known, so the second smallest is 6: the task at
+    # (4, 4) could be as near as 4 + 4 (sqrt 2 - 1) = 5.66 and is needed; the one at (0, 7) cannot beat 7.
+    reads = np.array([[3.0, 6.0, np.inf, np.inf]])
+    tasks = np.array([[0, 3], [6, 0], [4, 4], [0, 7]])
+    assert tasks_in_reach(reads, np.array([[0, 0]]), tasks, 2).tolist() == [True, True, True, False]
+    # Fewer known reads than the cap: every task may be kept, so all are needed.
+    assert tasks_in_reach(reads, np.array([[0, 0]]), tasks, 3).all()
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.integers(1, 3).flatmap(
+        lambda n: st.tuples(
+            points(n),
+            st.integers(1, 12).flatmap(points),
+            st.integers(1, 6),
+            st.randoms(use_true_random=False),
+        )
+    )
+)
+def test_tasks_out_of_reach_are_never_kept(case) -> None:
+    # Any true distances no shorter than the straight-line bound, reads no shorter than them (inf where not
+    # read): the tasks cap_tasks keeps, and their distances, are the same when the tasks tasks_in_reach
+    # leaves out stay at inf wherever they were not read.
+    robots_l, tasks_l, cap, rnd = case
+    robots, tasks = np.array(robots_l, np.float64), np.array(tasks_l, np.float64)
+    gap = np.abs(tasks[None] - robots[:, None])
+    octile = gap.max(axis=2) + (np.sqrt(2.0) - 1.0) * gap.min(axis=2)
+    true = octile * np.array([[1.0 + rnd.choice([0.0, 0.3, 1.0]) for _ in tasks_l] for _ in robots_l])
+    reads = np.where(
+        np.array([[rnd.random() < 0.5 for _ in tasks_l] for _ in robots_l]),
+        true * np.array([[1.0 + rnd.choice([0.0, 0.5]) for _ in tasks_l] for _ in robots_l]),
+        np.inf,
+    )
+    final = np.where(np.isfinite(reads), reads, true)  # what the searches would have found
+    needed = tasks_in_reach(reads, robots, tasks, cap)
+    pruned = np.where(np.isfinite(reads) | needed[None, :], final, np.inf)
+    keep = cap_tasks(final.min(axis=0), cap)
+    assert cap_tasks(pruned.min(axis=0), cap).tolist() == keep.tolist()
+    np.testing.assert_array_equal(pruned[:, keep], final[:, keep])
 
 
 def brute_force(d_start: np.ndarray, d: np.ndarray) -> float:
@@ -299,3 +349,16 @@ def test_near_far_rows_and_robot_distances_fall_back_to_exact_searches_behind_a_
     assert d[0, 0] >= from_robot[0] == 5.0  # 5 cells, beyond the radius: the blocks' estimate
     assert fields[0].value(0, 19) == pytest.approx(d[0, 2])  # noted in the field for the paths
     assert far_fields(passable, robots, 4, 3)[0].value(0, 19) == np.inf
+    # A filter of the shared own cells (CoScan's tasks beyond those it may keep) leaves task 2 unsearched;
+    # task 1's search from the robot gives what it gave with every task.
+    seen: list[np.ndarray] = []
+
+    def only_task_1(reads: np.ndarray) -> np.ndarray:
+        seen.append(reads)
+        return np.array([False, True, False])
+
+    filtered = far.fields(passable, robots, own_rc=[tasks], own_needed=only_task_1)[0]
+    assert np.isinf(seen[0][0, 1:]).all()  # the reads before any search: the far side unread
+    assert filtered.value(0, 12) == fields[0].value(0, 12) and filtered.value(0, 19) == np.inf
+    with pytest.raises(ValueError, match="give every source the same own_rc"):
+        far.fields(passable, np.vstack([robots, robots]), own_rc=[tasks, tasks[:1]], own_needed=only_task_1)

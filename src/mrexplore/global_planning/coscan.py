@@ -7,6 +7,7 @@ the pipeline that feeds them is ``strategies.CoScanPipeline``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -19,6 +20,7 @@ from mrexplore.global_planning.tours import open_tour
 __all__ = [
     "sample_tasks",
     "cap_tasks",
+    "tasks_in_reach",
     "lloyd_clusters",
     "LloydResult",
     "TaskRows",
@@ -93,6 +95,37 @@ def cap_tasks(nearest_robot_dist: NDArray[np.floating], max_tasks: int) -> NDArr
     order = np.argsort(d, kind="stable")
     order = order[np.isfinite(d[order])][:max_tasks]
     return np.sort(order)
+
+
+_LOWER_SLACK = 1e-4
+"""Relative slack under which :func:`tasks_in_reach` takes its straight-line bound: searched distances add in
+float32, so an exact one may read a few units in the last place under the true length."""
+
+
+def tasks_in_reach(
+    reads: NDArray[np.floating], robots_rc: NDArray[np.integer], tasks_rc: NDArray[np.integer], max_tasks: int
+) -> NDArray[np.bool_]:
+    """Which tasks :func:`cap_tasks` may keep, given distances known to be no shorter than the true ones
+    (``reads``, ``(n_robots, m)``, ``inf`` where not known yet): all but those whose shortest possible way
+    from any robot (the octile distance on the 8-connected grid, which no path beats) is longer than the
+    ``max_tasks``-th smallest of the best reads. At least ``max_tasks`` tasks are then nearer than any such
+    task, whatever its searched distance, so the tasks kept and their distances are the same without
+    searching its ``inf`` reads.
+
+    Examples
+    --------
+    >>> reads = np.array([[3.0, 5.0, np.inf, np.inf]])  # the third task could be 4 away, the last not
+    >>> tasks_in_reach(reads, np.array([[0, 0]]), np.array([[0, 3], [5, 0], [4, 0], [0, 9]]), 2).tolist()
+    [True, True, True, False]
+    """
+    reads = np.asarray(reads, dtype=np.float64)
+    best = reads.min(axis=0) if len(reads) else np.full(len(tasks_rc), np.inf)
+    known = np.sort(best[np.isfinite(best)])
+    if len(known) < max_tasks or max_tasks < 1:
+        return np.ones(len(best), dtype=bool)
+    gap = np.abs(np.asarray(tasks_rc, np.float64)[None, :, :] - np.asarray(robots_rc, np.float64)[:, None, :])
+    octile = gap.max(axis=2) + (math.sqrt(2.0) - 1.0) * gap.min(axis=2)
+    return octile.min(axis=0) * (1.0 - _LOWER_SLACK) <= known[max_tasks - 1]
 
 
 @dataclass(frozen=True)
