@@ -325,31 +325,15 @@ class _Seeds:
     """``(k,) float64`` the exact distance from the source to each block's middle cell, in cells."""
 
 
-def _near_search(passable: BoolGrid, src: NDArray[np.integer], radius: int) -> Field:
-    """The exact search from ``src`` up to ``radius`` cells, inside :func:`_near_box` (stopped at the radius:
-    beyond it a near/far field reads the coarse estimate, and seeds and paths stay within)."""
-    r0, r1, c0, c1 = _near_box(passable, src, radius)
-    local = np.array([[int(src[0]) - r0, int(src[1]) - c0]])
-    near = distance_fields(passable[r0:r1, c0:c1], local, limit=float(radius))[0]
-    return Field(near.values, near.r0 + r0, near.c0 + c0, (int(passable.shape[0]), int(passable.shape[1])))
-
-
-def _seeds(
-    passable: BoolGrid,
-    grid: CoarseGrid,
-    src: NDArray[np.integer],
-    radius: int,
-    ordered: bool = True,
-    near: Field | None = None,
-) -> _Seeds:
+def _seeds(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius: int, ordered: bool = True) -> _Seeds:
     """The exact search from ``src`` up to ``radius`` cells and the blocks it seeds (:class:`_Seeds`): what a
     near/far field starts its coarse search from (:func:`_one`), and what joins a cell to the sources'
-    coarse fields (:func:`_back`); unsorted with ``ordered=False`` (the portal graph sorts them by sector).
-    ``near``: that exact search where the caller has it already (:func:`_near_search` of the same
-    ``passable``, ``src`` and ``radius``: it depends on neither the blocks nor the order)."""
+    coarse fields (:func:`_back`); unsorted with ``ordered=False`` (the portal graph sorts them by sector)."""
     r0, r1, c0, c1 = _near_box(passable, src, radius)
-    if near is None:
-        near = _near_search(passable, src, radius)
+    # Stopped at the radius: beyond it the field reads the coarse estimate, and seeds and paths stay within.
+    local = np.array([[int(src[0]) - r0, int(src[1]) - c0]])
+    near = distance_fields(passable[r0:r1, c0:c1], local, limit=float(radius))[0]
+    near = Field(near.values, near.r0 + r0, near.c0 + c0, (int(passable.shape[0]), int(passable.shape[1])))
     f = grid.factor
     h, w = grid.passable.shape
     blk_r0 = max(0, (r0 - grid.r0) // f)
@@ -369,13 +353,10 @@ def _seeds(
     return _Seeds(near, blocks[order], d[order])
 
 
-def _one(
-    passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius: int, near: Field | None = None
-) -> NearFarField:
-    """The near/far field of ``src`` on ``grid``'s blocks (``near``: as :func:`_seeds`)."""
+def _one(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius: int) -> NearFarField:
     if grid.portals is not None:
-        return _one_on_portals(passable, grid, grid.portals, src, radius, near)
-    seeds = _seeds(passable, grid, src, radius, near=near)
+        return _one_on_portals(passable, grid, grid.portals, src, radius)
+    seeds = _seeds(passable, grid, src, radius)
     f = grid.factor
     h, w = grid.passable.shape
     blocks, keys = seeds.blocks, (seeds.cells / f).astype(np.float32)
@@ -389,12 +370,7 @@ def _one(
 
 
 def _one_on_portals(
-    passable: BoolGrid,
-    grid: CoarseGrid,
-    portals: PortalGraph,
-    src: NDArray[np.integer],
-    radius: int,
-    near: Field | None = None,
+    passable: BoolGrid, grid: CoarseGrid, portals: PortalGraph, src: NDArray[np.integer], radius: int
 ) -> NearFarField:
     """:func:`_one` on the portal graph: the exact search up to ``radius`` and the blocks it seeds
     (:func:`_seeds`), then the graph searched from the nodes those seeds reach inside their sectors: seeding
@@ -402,7 +378,7 @@ def _one_on_portals(
     distance beyond it. A robot whose seed blocks join no node even so (single blocks in a gap that the
     sectors' lattice cuts) reads ``inf``, and :func:`far_fields` searches what it must read on the finer
     blocks."""
-    seeds = _seeds(passable, grid, src, radius, ordered=False, near=near)
+    seeds = _seeds(passable, grid, src, radius, ordered=False)
     f = grid.factor
     blocks = seeds.blocks + np.array([grid.r0 // f, grid.c0 // f])
     field_ = portals.search_from(blocks, seeds.cells / f)
@@ -416,7 +392,6 @@ def _back(
     radius: int,
     sources: NDArray[np.int64],
     fields: Sequence[NearFarField],
-    near: Field | None = None,
 ) -> NDArray[np.float64]:
     """Distances from ``cell`` to each of ``sources`` (whose near/far fields are ``fields``), ``(n,)
     float64``, without a search over the coarse grid: exact where the cell's own exact part reaches the
@@ -427,8 +402,8 @@ def _back(
     A near/far field of the cell's own, read at the sources, went the same ways the other way round, with
     a coarse search of its own: late on a KTH floor at 0.05 m, two such fields a decision (cluster centres
     in ragged, ray-lit free space that no block next to them reaches) were a fifth of the decision's
-    coarse searches (``perf/replay_far_fields.py``). ``near``: as :func:`_seeds`."""
-    seeds = _seeds(passable, grid, cell, radius, near=near)
+    coarse searches (``perf/replay_far_fields.py``)."""
+    seeds = _seeds(passable, grid, cell, radius)
     out = np.full(len(sources), np.inf)
     if len(seeds.blocks):
         coarse = np.stack([fl.blocks(seeds.blocks[:, 0], seeds.blocks[:, 1]) for fl in fields])
@@ -561,15 +536,6 @@ def far_fields(
         return distance_fields(passable, src[None], cells)[0].at(cells)
 
     finer: list[CoarseGrid | None] = []
-    nears: dict[tuple[int, int, int], Field] = {}
-
-    def near_of(src: NDArray[np.int64], radius: int) -> Field:
-        """The exact search from ``src`` up to ``radius`` (:func:`_near_search`), made once per call: a
-        source's own field, its field on finer blocks and a cell's joins back all start from it."""
-        key = (int(src[0]), int(src[1]), radius)
-        if key not in nears:
-            nears[key] = _near_search(passable, src, radius)
-        return nears[key]
 
     def unjoined(
         src: NDArray[np.int64], cells: NDArray[np.int64], keep: NearFarField | None = None
@@ -583,7 +549,7 @@ def far_fields(
             finer.append(pooled.finer() if pooled.fine is passable else _finer_of(passable, pooled.factor))
         out = np.full(len(cells), np.inf)
         if finer[0] is not None:
-            on_finer = _one(passable, finer[0], src, radius_cells, near_of(src, radius_cells))
+            on_finer = _one(passable, finer[0], src, radius_cells)
             out = on_finer.at(cells)
             if keep is not None:
                 keep.finer.append(on_finer)
@@ -593,8 +559,6 @@ def far_fields(
         return out
 
     fields = map_threads(lambda src: _one(passable, grid, src, radius_cells), list(sources))
-    for src, f in zip(sources, fields, strict=True):
-        nears[(int(src[0]), int(src[1]), radius_cells)] = f.near
     if own_needed is not None and own_rc is not None and len(fields):
         shared = np.asarray(own_rc[0], np.int64).reshape(-1, 2)
         if len(own_rc) != len(fields) or any(not np.array_equal(np.reshape(o, (-1, 2)), shared) for o in own_rc):
@@ -622,7 +586,7 @@ def far_fields(
             # its own, :func:`_back`); a search of its own on finer blocks, or exact, if need be.
             key = (int(cell[0]), int(cell[1]))
             searched = np.array([key in f.known for f in fields])  # found already, from its source
-            d = _back(passable, grid, cell, radius_cells, sources, fields, near_of(cell, radius_cells))
+            d = _back(passable, grid, cell, radius_cells, sources, fields)
             still = ~np.isfinite(d) & ~searched
             if still.any():
                 # Ragged free space round the cell joins no block of theirs within the radius. Twice the
