@@ -211,6 +211,39 @@ def test_commitment_keeps_a_robot_on_its_goal(commitment: float, goal: list[int]
     assert d.goals_rc.tolist() == [goal]
 
 
+def test_nearest_stops_its_searches_at_each_robots_nearest_cluster_and_explores_the_same(small_map) -> None:
+    # nearest reads only each robot's nearest cluster and its own goal, so its own decisions search no
+    # farther; the mission is the same as with whole searches, step for step, with and without hysteresis.
+    for commitment in (None, 1.0):
+        stopped = make_strategy("nearest", GlobalPlanningConfig(commitment=commitment))
+        assert stopped.nearest_only
+        runs = [
+            run_mission(small_map, pipeline, SimConfig(robots=3), MissionConfig(max_steps=400), seed=4)
+            for pipeline in (stopped, replace(stopped, nearest_only=False))
+        ]
+        a, b = ({k: v for k, v in r.measures.to_dict().items() if k not in TIMING_KEYS} for r in runs)
+        assert a == b and a["decisions"] > 10
+        assert np.array_equal(runs[0].coverage_curve, runs[1].coverage_curve)
+
+
+def test_nearest_poses_every_distance_for_another_planner() -> None:
+    state = state_grid("""
+        #########
+        ?.......?
+        ?.......?
+        ?.......?
+        #########
+    """)
+    pipeline = make_strategy("nearest")
+    robots = np.array([[2, 2]], np.int32)
+    for own, right in ((False, 5.0), (True, np.inf)):
+        posed = pipeline.pose(state, robots, 0.05, own_planner=own)
+        assert posed.problem is not None
+        left = posed.problem.clusters.centers_rc[:, 1].tolist().index(1)
+        assert posed.problem.dist_cells[0, left] == 1.0 and posed.problem.dist_cells[0, 1 - left] == right
+        assert (posed.problem.robot_dist_cells is None) == own
+
+
 def test_commitment_defaults() -> None:
     assert make_strategy("utility").commitment == 0.5 and make_strategy("nearest").commitment == 0.5
     assert make_strategy("hier").commitment == 1.0

@@ -35,6 +35,7 @@ from mrexplore.paths.distance_field import (
     distance_fields,
     distance_matrix,
     distances_at,
+    nearest_fields,
     pairwise_distances,
 )
 from mrexplore.paths.far_field import CoarseGrid, NearFarField, coarse_grid, far_fields, finer_side, path_to
@@ -259,6 +260,10 @@ class ExplorationPipeline:
     oracle, whose goals are viewpoints)."""
     policy: dict[str, str] | None = None
     """Where a learned planner's weights came from: ``{"path", "sha256", "code_version"}``; None: no network."""
+    nearest_only: bool = False
+    """The planner reads only each robot's nearest cluster (and its current goal's, for hysteresis): in the
+    pipeline's own decisions (:meth:`decide`) each exact search stops there (:func:`nearest_fields`); a
+    problem posed for another planner (:meth:`pose`) has every distance."""
     distances: GlobalPlanningConfig = field(default_factory=GlobalPlanningConfig)
     """Where robot distances stop being exact on large maps (``far_above_cells``, ``exact_radius_m``,
     ``coarse_cell_m``, ``portal_sector_blocks``)."""
@@ -336,6 +341,7 @@ class ExplorationPipeline:
         current: Sequence[NDArray[np.int32]] | None = None,
         rng: np.random.Generator | None = None,
         frontiers: Frontiers | None = None,
+        own_planner: bool = False,
     ) -> PosedDecision:
         """Layer 1 and the distances: the :class:`PosedDecision` a global planner answers (or the end).
 
@@ -346,6 +352,8 @@ class ExplorationPipeline:
         route. Without it, Mean-Shift's snapped centres of large clusters jump between far pieces from
         one decision to the next and robots turn back and forth. ``frontiers``: those of ``state`` where the
         caller has them (the centre keeps them where the grid changed; None: detected here).
+        ``own_planner``: the problem goes to this pipeline's own planner only (:meth:`decide`), so the
+        searches may stop where it stops reading (:attr:`nearest_only`).
         """
         if frontiers is None:
             frontiers = detect_frontiers(state)
@@ -383,8 +391,13 @@ class ExplorationPipeline:
         # goals. Each search stops once it has them all (a strategy that asked for fields has them).
         targets = np.vstack([clusters.centers_rc, clusters.members_rc, robots_rc, *goals])
         own = goals if self.commitment < 1 else []  # a robot's own goal is read for hysteresis only
+        nearest = self.nearest_only and own_planner and far is None and not computed
         if computed:  # the strategy's candidates asked for them
             fields = computed[0]
+        elif nearest:
+            # Each robot's nearest centre (ties too) and its own goal are all the planner and the paths read.
+            mine = own if own else [_NO_ROUTE] * n
+            fields = list(nearest_fields(passable, robots_rc, clusters.centers_rc, mine, box=box))
         elif far is None:
             fields = list(distance_fields(passable, robots_rc, targets, box=box))
         else:
@@ -401,7 +414,7 @@ class ExplorationPipeline:
             resolution_m,
             planning,
             current_cluster=_current_clusters(clusters, current, n),
-            robot_dist_cells=np.stack([distances_at(f, robots) for f in fields]),
+            robot_dist_cells=None if nearest else np.stack([distances_at(f, robots) for f in fields]),
             rng=rng,
         )
         return PosedDecision(problem, None, _Posed(frontiers, fields, passable, kept, cand))
@@ -477,7 +490,7 @@ class ExplorationPipeline:
         """Run layers 1-3 on the centre's grid and give every robot a goal, a route and a path
         (:meth:`pose`, the global planner's answer, :meth:`finish`); ``rng`` reaches the planner in the
         problem (a seeded generator for stochastic planners); ``frontiers`` as in :meth:`pose`."""
-        posed = self.pose(state, robots_rc, resolution_m, blacklist, current, rng, frontiers)
+        posed = self.pose(state, robots_rc, resolution_m, blacklist, current, rng, frontiers, own_planner=True)
         if posed.problem is None:
             return posed.final  # type: ignore[return-value]
         return self.finish(posed, self.assign(posed))
@@ -720,7 +733,8 @@ def _commitment(gp: GlobalPlanningConfig, default: float) -> float:
 def _nearest(
     gp: GlobalPlanningConfig, pp: PreprocessConfig, lp: LocalPlanningConfig, policy: str | None
 ) -> ExplorationPipeline:
-    return ExplorationPipeline("nearest", NearestPlanner(), pp, commitment=_commitment(gp, CENTRE_COMMITMENT))
+    commitment = _commitment(gp, CENTRE_COMMITMENT)
+    return ExplorationPipeline("nearest", NearestPlanner(), pp, commitment=commitment, nearest_only=True)
 
 
 def _utility(

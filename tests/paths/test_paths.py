@@ -18,6 +18,7 @@ from mrexplore.paths.distance_field import (
     distance_fields,
     distance_matrix,
     distances_at,
+    nearest_fields,
     pairwise_distances,
 )
 
@@ -150,6 +151,54 @@ def test_fields_stopped_at_their_targets_are_exact_up_to_them(seed: int) -> None
             assert (
                 descend_path(stopped, passable, tuple(t)).tolist() == descend_path(whole, passable, tuple(t)).tolist()
             )
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.integers(0, 10**6))
+def test_fields_stopped_at_the_nearest_candidate_hold_it_its_ties_and_the_musts(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    passable = rng.random((int(rng.integers(2, 25)), int(rng.integers(2, 25)))) < 0.7
+    cells = np.argwhere(np.ones_like(passable))
+    sources = cells[rng.integers(0, len(cells), 3)]
+    candidates = cells[rng.integers(0, len(cells), int(rng.integers(0, 6)))]
+    musts = [cells[rng.integers(0, len(cells), int(rng.integers(0, 3)))] for _ in sources]
+    whole_fields = distance_fields(passable, sources)
+    for whole, stopped, must in zip(
+        whole_fields, nearest_fields(passable, sources, candidates, musts), musts, strict=True
+    ):
+        full, part = whole.full(), stopped.full()
+        finite = np.isfinite(part)
+        np.testing.assert_array_equal(part[finite], full[finite])  # what it holds is exact
+        np.testing.assert_array_equal(stopped.at(must), whole.at(must))
+        d = whole.at(candidates)
+        if np.isfinite(d).any():
+            nearest = d == d.min()
+            np.testing.assert_array_equal(stopped.at(candidates)[nearest], d[nearest])  # ties included
+            assert not np.isfinite(stopped.at(candidates)[d > d.min()]).any() or len(must)  # no farther
+            np.testing.assert_array_equal(np.argmin(stopped.at(candidates)), np.argmin(d))
+            for t in candidates[nearest]:
+                assert (
+                    descend_path(stopped, passable, tuple(t)).tolist()
+                    == descend_path(whole, passable, tuple(t)).tolist()
+                )
+        else:
+            assert not np.isfinite(stopped.at(candidates)).any()
+
+
+def test_a_field_stops_at_the_nearest_candidate_or_at_its_own_cells_beyond() -> None:
+    corridor = np.ones((1, 9), bool)
+    none = np.zeros((0, 2), int)
+    cands = np.array([[0, 0], [0, 6], [0, 2]])
+    f = nearest_fields(corridor, np.array([[0, 4]]), cands, [none])[0]
+    assert f.full()[0].tolist() == [math.inf, math.inf, 2, 1, 0, 1, 2, math.inf, math.inf]
+    f = nearest_fields(corridor, np.array([[0, 4]]), cands, [np.array([[0, 7]])])[0]  # its goal, 3 cells away
+    assert f.full()[0].tolist() == [math.inf, 3, 2, 1, 0, 1, 2, 3, math.inf]
+    blocked = corridor.copy()
+    blocked[0, 3] = blocked[0, 5] = False  # nothing reachable: the search runs out, as a whole one does
+    f = nearest_fields(blocked, np.array([[0, 4]]), cands, [none])[0]
+    assert f.full()[0].tolist() == [math.inf] * 4 + [0] + [math.inf] * 4
+    with pytest.raises(ValueError, match="must_rc has 0 entries for 1 sources; give one per source"):
+        nearest_fields(corridor, np.array([[0, 4]]), cands, [])
 
 
 def test_a_field_stops_at_its_farthest_target() -> None:

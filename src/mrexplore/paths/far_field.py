@@ -62,7 +62,7 @@ def _tails(
     n = (side + 2) * Wp
     q_node = np.empty((2, n), dtype=np.int32)
     q_key = np.empty((2, n), dtype=np.float32)
-    is_target = np.zeros(n, dtype=np.bool_)
+    is_target = np.zeros(n, dtype=np.uint8)
     no_targets = np.zeros(0, dtype=np.int64)
     best = np.empty(n, dtype=np.float32)
     for i in range(k):
