@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -12,7 +13,7 @@ from hypothesis import strategies as st
 
 from mrexplore.config import SensorConfig
 from mrexplore.sim.belief import logit
-from mrexplore.sim.lidar import cast_ray, ray_count, ray_directions, scan_update
+from mrexplore.sim.lidar import Beams, cast_ray, ray_count, ray_directions, scan_mark, scan_update
 
 
 def reference_ray(occ: np.ndarray, sr: int, sc: int, dr: float, dc: float, rng: float) -> tuple[list, bool]:
@@ -109,3 +110,29 @@ def test_repeated_scans_accumulate_then_clamp() -> None:
     assert lo[1, 2] == pytest.approx(logit(sensor.p_clamp_min))
     assert lo[0, 2] == pytest.approx(logit(sensor.p_clamp_max))
     assert not mark.any()
+
+
+@settings(max_examples=120, deadline=None)
+@given(st.integers(0, 10**6), st.floats(1.0, 9.0), st.sampled_from([1.0, 1.5]), st.sampled_from([0.0, 0.0, 1.5]))
+def test_beams_walked_by_their_moves_mark_what_cast_beams_mark(
+    seed: int, range_cells: float, oversampling: float, noise_sd: float
+) -> None:
+    # From anywhere, the grid's edges and corners included (and, on the larger grids, from cells no beam can
+    # take off the grid, where the walk skips its bounds checks), with and without short readings.
+    rng = np.random.default_rng(seed)
+    h, w = int(rng.integers(1, 70)), int(rng.integers(1, 70))
+    occ = rng.random((h, w)) < rng.choice([0.0, 0.1, 0.3])
+    beams = Beams.of(range_cells, oversampling)
+    assert len(beams.dirs) == ray_count(range_cells, oversampling)
+    cast, walked = np.zeros((h, w), np.int8), np.zeros((h, w), np.int8)
+    for sr, sc in [(0, 0), (h - 1, w - 1), (int(rng.integers(h)), int(rng.integers(w))), (h // 2, w // 2)]:
+        noise = rng.normal(0.0, noise_sd, len(beams.dirs)) if noise_sd else np.zeros(len(beams.dirs))
+        window = scan_mark(occ, sr, sc, beams.dirs, range_cells, noise, cast)
+        assert beams.mark(occ, sr, sc, noise, walked) == window
+        np.testing.assert_array_equal(walked, cast)
+        cast[:], walked[:] = 0, 0
+
+
+def test_beams_are_shared_by_a_snapshot() -> None:
+    beams = Beams.of(4.0, 1.0)
+    assert copy.deepcopy({"b": beams})["b"] is beams

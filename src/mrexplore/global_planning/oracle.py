@@ -19,7 +19,7 @@ from scipy.optimize import linear_sum_assignment
 from mrexplore.boxes import cells_of
 from mrexplore.global_planning.tours import open_tour, split_tour
 from mrexplore.paths.distance_field import distance_fields, distance_matrix, distances_at
-from mrexplore.sim.lidar import ray_count, ray_directions, scan_mark
+from mrexplore.sim.lidar import Beams
 from mrexplore.types import BoolGrid
 
 __all__ = ["greedy_cover", "viewpoint_footprints", "plan_oracle_routes", "OraclePlan"]
@@ -36,13 +36,13 @@ def viewpoint_footprints(
     targets."""
     target_id = np.full(targets.shape, -1, dtype=np.int64)
     target_id[targets] = np.arange(int(targets.sum()))
-    dirs = ray_directions(ray_count(range_cells, ray_oversampling))
-    noise = np.zeros(len(dirs))
+    beams = Beams.of(float(range_cells), ray_oversampling)
+    noise = np.zeros(len(beams.dirs))
     mark = np.zeros(occupied.shape, dtype=np.int8)
     occ = np.ascontiguousarray(occupied)
     out = []
     for r, c in candidates_rc:
-        r0, r1, c0, c1 = scan_mark(occ, int(r), int(c), dirs, float(range_cells), noise, mark)
+        r0, r1, c0, c1 = beams.mark(occ, int(r), int(c), noise, mark)
         window = mark[r0:r1, c0:c1]
         ids = target_id[r0:r1, c0:c1][window > 0]
         out.append(ids[ids >= 0].astype(np.int32))

@@ -7,12 +7,13 @@ many beams get one observation per scan, as a real sensor model intends.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["ray_count", "ray_directions", "cast_ray", "scan_mark", "apply_scan", "scan_update"]
+__all__ = ["ray_count", "ray_directions", "cast_ray", "scan_mark", "Beams", "apply_scan", "scan_update"]
 
 _MISS = 1
 _HIT = 2
@@ -127,6 +128,165 @@ def scan_mark(
         c0 = min(c0, c)
         c1 = max(c1, c + 1)
     return r0, r1, c0, c1
+
+
+@nb.njit(cache=True)
+def _beam_moves(
+    dirs: np.ndarray, range_cells: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - numba
+    """Each beam of :func:`cast_ray` from a cell's centre on an open grid, as moves: ``(n_rays, L) uint8``
+    (1: a column step, 0: a row step), the cells it enters within range (its source among them), and the
+    sign of its row and column steps."""
+    buf_len = int(4 * range_cells) + 8
+    side = 2 * buf_len + 3
+    open_grid = np.zeros((side, side), dtype=np.bool_)
+    o = buf_len + 1
+    n_rays = dirs.shape[0]
+    moves = np.zeros((n_rays, buf_len), dtype=np.uint8)
+    count = np.zeros(n_rays, dtype=np.int64)
+    sign_r = np.zeros(n_rays, dtype=np.int64)
+    sign_c = np.zeros(n_rays, dtype=np.int64)
+    buf_r = np.empty(buf_len, dtype=np.int64)
+    buf_c = np.empty(buf_len, dtype=np.int64)
+    buf_t = np.empty(buf_len, dtype=np.float64)
+    for k in range(n_rays):
+        n, _ = cast_ray(open_grid, o, o, dirs[k, 0], dirs[k, 1], range_cells, buf_r, buf_c, buf_t)
+        count[k] = n
+        for i in range(n - 1):
+            if buf_c[i + 1] != buf_c[i]:
+                moves[k, i] = 1
+                sign_c[k] = buf_c[i + 1] - buf_c[i]
+            else:
+                sign_r[k] = buf_r[i + 1] - buf_r[i]
+    return moves, count, sign_r, sign_c
+
+
+@nb.njit(cache=True, nogil=True)
+def _mark_by_moves(
+    occupied: np.ndarray,
+    sr: int,
+    sc: int,
+    moves: np.ndarray,
+    count: np.ndarray,
+    sign_r: np.ndarray,
+    sign_c: np.ndarray,
+    dirs: np.ndarray,
+    range_cells: float,
+    noise_cells: np.ndarray,
+    mark: np.ndarray,
+) -> tuple[int, int, int, int]:  # pragma: no cover - numba
+    """:func:`scan_mark` with each beam walked by its precomputed moves (:class:`Beams`), marking as it goes;
+    a beam whose reading is short (negative noise) is cast as there, to find where it ends."""
+    H, W = occupied.shape
+    occ = occupied.reshape(H * W)  # views: both are C-contiguous (numba refuses to reshape others)
+    mk = mark.reshape(H * W)
+    r0, r1, c0, c1 = sr, sr + 1, sc, sc + 1
+    reach = moves.shape[1] + 1
+    inside = sr - reach >= 0 and sr + reach < H and sc - reach >= 0 and sc + reach < W  # no beam leaves the grid
+    buf_len = int(4 * range_cells) + 8
+    buf_r = np.empty(buf_len, dtype=np.int64)
+    buf_c = np.empty(buf_len, dtype=np.int64)
+    buf_t = np.empty(buf_len, dtype=np.float64)
+    for k in range(moves.shape[0]):
+        if noise_cells[k] < 0.0:
+            n, hit = cast_ray(occupied, sr, sc, dirs[k, 0], dirs[k, 1], range_cells, buf_r, buf_c, buf_t)
+            end = n - 1
+            if hit:
+                measured = buf_t[end] + noise_cells[k]
+                while end > 0 and buf_t[end] > measured:
+                    end -= 1
+            for i in range(end + 1):
+                v = _HIT if (hit and i == end) else _MISS
+                if v > mark[buf_r[i], buf_c[i]]:
+                    mark[buf_r[i], buf_c[i]] = v
+            r, c = buf_r[end], buf_c[end]
+        else:
+            dr, dc = sign_r[k], sign_c[k]
+            r, c = sr, sc
+            at = r * W + c
+            n = count[k]
+            for i in range(n):
+                if occ[at]:
+                    mk[at] = _HIT  # the beam's end wins over any pass-through
+                    break
+                if mk[at] == 0:
+                    mk[at] = _MISS
+                if i == n - 1:
+                    break
+                if moves[k, i]:
+                    if not inside and (c + dc < 0 or c + dc >= W):
+                        break
+                    c += dc
+                    at += dc
+                else:
+                    if not inside and (r + dr < 0 or r + dr >= H):
+                        break
+                    r += dr
+                    at += dr * W
+        # The last cell kept is the farthest one of the beam: it bounds the window.
+        r0 = min(r0, r)
+        r1 = max(r1, r + 1)
+        c0 = min(c0, c)
+        c1 = max(c1, c + 1)
+    return r0, r1, c0, c1
+
+
+@dataclass(frozen=True)
+class Beams:
+    """A sensor's beams, each walked once on an open grid: from a cell's centre a beam first crosses a cell
+    side half a cell away on each axis, so the cells it enters, as steps from its source, are the same from
+    every cell. A scan then walks those steps (:meth:`mark`) instead of casting each beam again: the same
+    marks as :func:`scan_mark`, about twice as fast on a KTH floor at 0.05 m (the simulator's scans were a
+    fifth of a whole mission's time there).
+
+    Examples
+    --------
+    >>> occ = np.zeros((5, 5), bool); occ[:, 4] = True
+    >>> beams = Beams.of(2.0, 1.0)
+    >>> mark = np.zeros((5, 5), np.int8)
+    >>> beams.mark(occ, 2, 2, np.zeros(len(beams.dirs)), mark)
+    (0, 5, 0, 5)
+    >>> mark[2].tolist()  # free to the left, the wall two cells to the right stops the beam
+    [1, 1, 1, 1, 2]
+    """
+
+    dirs: NDArray[np.float64]
+    """``(n_rays, 2) float64`` the beams' directions (:func:`ray_directions`)."""
+    range_cells: float
+    moves: NDArray[np.uint8]
+    """``(n_rays, L) uint8`` each beam's steps from its source: 1 a column step, 0 a row step."""
+    count: NDArray[np.int64]
+    """``(n_rays,) int64`` the cells each beam enters within range, its source included."""
+    sign_r: NDArray[np.int64]
+    sign_c: NDArray[np.int64]
+
+    def __deepcopy__(self, memo: dict[int, object]) -> Beams:
+        return self  # read-only once built: a mission's snapshot shares it
+
+    @classmethod
+    def of(cls, range_cells: float, oversampling: float) -> Beams:
+        """The beams of :func:`ray_count` and :func:`ray_directions` for a sensor of ``range_cells``."""
+        dirs = ray_directions(ray_count(range_cells, oversampling))
+        return cls(dirs, float(range_cells), *_beam_moves(dirs, float(range_cells)))
+
+    def mark(
+        self, occupied: np.ndarray, sr: int, sc: int, noise_cells: np.ndarray, mark: np.ndarray
+    ) -> tuple[int, int, int, int]:
+        """:func:`scan_mark` from ``(sr, sc)``: the same marks in ``mark`` and the same window.
+        ``occupied`` ``(H, W) bool`` C-contiguous."""
+        return _mark_by_moves(
+            occupied,
+            sr,
+            sc,
+            self.moves,
+            self.count,
+            self.sign_r,
+            self.sign_c,
+            self.dirs,
+            self.range_cells,
+            noise_cells,
+            mark,
+        )
 
 
 @nb.njit(cache=True, nogil=True)

@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from mrexplore.config import SimConfig
 from mrexplore.maps.ground_truth import GroundTruthMap, explorable_region
 from mrexplore.sim.belief import Belief, logit
-from mrexplore.sim.lidar import apply_scan, ray_count, ray_directions, scan_mark
+from mrexplore.sim.lidar import Beams, apply_scan
 from mrexplore.threads import map_threads
 from mrexplore.types import BoolGrid
 
@@ -77,7 +77,7 @@ class ExplorationSim:
         res = truth.resolution_m
         s = cfg.sensor
         self._range_cells = s.range_m / res
-        self._dirs = ray_directions(ray_count(self._range_cells, s.ray_oversampling))
+        self._beams = Beams.of(self._range_cells, s.ray_oversampling)
         self._l = (logit(s.p_hit), logit(s.p_miss), logit(s.p_clamp_min), logit(s.p_clamp_max))
         # Per-robot scratch so that robots cast their beams in parallel (the kernel releases the GIL).
         self._mark = [np.zeros(shape, dtype=np.int8) for _ in range(self.n_robots)]
@@ -156,14 +156,14 @@ class ExplorationSim:
     def _sense_all(self) -> None:
         """Every robot scans (beams cast in parallel), then the scans are fused in robot order."""
         noise_sd = self.cfg.sensor.range_noise_m / self.truth.resolution_m
-        n_rays = len(self._dirs)
+        n_rays = len(self._beams.dirs)
         live = [int(i) for i in np.flatnonzero(self.alive)]
         # Noise is drawn in robot order from the one generator, so results do not depend on threads.
         noises = {i: self.rng.normal(0.0, noise_sd, size=n_rays) if noise_sd > 0 else np.zeros(n_rays) for i in live}
 
         def cast(i: int) -> tuple[int, int, int, int]:
             r, c = self.positions_rc[i]
-            return scan_mark(self._occupied, int(r), int(c), self._dirs, self._range_cells, noises[i], self._mark[i])
+            return self._beams.mark(self._occupied, int(r), int(c), noises[i], self._mark[i])
 
         windows = map_threads(cast, live)
         for i, window in zip(live, windows, strict=True):
