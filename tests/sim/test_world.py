@@ -5,9 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from conftest import truth_map
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mrexplore.config import MotionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
+from mrexplore.sim.belief import logit
 from mrexplore.sim.starts import draw_starts, starts_from_xy
 from mrexplore.sim.world import ExplorationSim
 from mrexplore.types import MrExploreError
@@ -62,6 +65,26 @@ def test_a_failed_robots_belief_blocks_no_path() -> None:
     assert sim.path_ahead_blocked(0)
     sim.fail(1)  # its belief never reaches the centre again: robot 0 drives on and sees for itself
     assert not sim.path_ahead_blocked(0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10**6))
+def test_path_ahead_blocked_sums_the_live_beliefs_in_float32_as_numpy_does(seed: int) -> None:
+    # Log-odds drawn from sums of the sensor's own steps, so that team sums land on and near the threshold.
+    rng = np.random.default_rng(seed)
+    sim = _sim(CORRIDOR, [[1, 1], [1, 2], [2, 1]])
+    sensor = sim.cfg.sensor
+    steps = np.array([logit(sensor.p_hit), logit(sensor.p_miss), 0.0], np.float32)
+    for b in sim.beliefs:
+        b.log_odds[:] = rng.choice(steps, size=(3, b.log_odds.size)).sum(axis=0).reshape(b.log_odds.shape)
+    sim.set_path(0, np.array([[1, 1], [1, 2], [1, 3], [2, 4], [2, 5], [1, 6], [1, 7]]))
+    for i in 1 + np.flatnonzero(rng.random(2) < 0.4):
+        sim.fail(int(i))  # a failed robot's belief counts no more
+    ahead = sim.remaining_path(0)[1:]
+    total = np.zeros(len(ahead), np.float32)
+    for i in np.flatnonzero(sim.alive):
+        total += sim.beliefs[i].log_odds[ahead[:, 0], ahead[:, 1]]
+    assert sim.path_ahead_blocked(0) == bool(np.any(total > logit(sensor.p_occupied)))
 
 
 def test_path_must_start_at_robot() -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
@@ -30,6 +31,22 @@ class StepResult:
     """``(n_robots,) float64`` metres each robot drove this step."""
     blocked: NDArray[np.bool_]
     """``(n_robots,) bool``: the next path cell turned out to be an obstacle; the robot stopped."""
+
+
+@nb.njit(cache=True)
+def _believed_occupied(
+    cells: np.ndarray, log_odds: tuple[np.ndarray, ...], threshold: np.float32
+) -> bool:  # pragma: no cover - numba
+    """Whether the ``log_odds`` summed in float32, in their order, exceed ``threshold`` at any of the
+    ``(k, 2)`` cells: the first such cell ends the walk."""
+    for j in range(cells.shape[0]):
+        r, c = cells[j, 0], cells[j, 1]
+        total = np.float32(0.0)
+        for grid in log_odds:
+            total += grid[r, c]
+        if total > threshold:
+            return True
+    return False
 
 
 class ExplorationSim:
@@ -193,8 +210,11 @@ class ExplorationSim:
         ahead = self.remaining_path(robot)[1:]
         if len(ahead) == 0:
             return False
-        thr = logit(self.cfg.sensor.p_occupied)
-        total = np.zeros(len(ahead), dtype=np.float32)
-        for i in np.flatnonzero(self.alive):
-            total += self.beliefs[i].log_odds[ahead[:, 0], ahead[:, 1]]
-        return bool(np.any(total > thr))
+        # float32 sums and threshold, as numpy's float32 arrays against a Python float; compiled, the walk
+        # stops at the first such cell (the numpy sums over every cell and robot cost 40-50 us a robot a step
+        # on a KTH floor with 8 robots, 4-6% of a mission).
+        thr = np.float32(logit(self.cfg.sensor.p_occupied))
+        grids = tuple(self.beliefs[i].log_odds for i in np.flatnonzero(self.alive))
+        if not grids:
+            return bool(np.float32(0.0) > thr)
+        return bool(_believed_occupied(ahead, grids, thr))
