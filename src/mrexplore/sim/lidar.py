@@ -236,8 +236,8 @@ class Beams:
     """A sensor's beams, each walked once on an open grid: from a cell's centre a beam first crosses a cell
     side half a cell away on each axis, so the cells it enters, as steps from its source, are the same from
     every cell. A scan then walks those steps (:meth:`mark`) instead of casting each beam again: the same
-    marks as :func:`scan_mark`, about twice as fast on a KTH floor at 0.05 m (the simulator's scans were a
-    fifth of a whole mission's time there).
+    marks as :func:`scan_mark` in half the time (100 against 197 us a scan from 3,000 random free cells of
+    KTH 50052748 at 0.05 m, a throwaway timing; the scans were a fifth of a whole mission's time there).
 
     Examples
     --------
