@@ -545,6 +545,18 @@ def _crop(passable: BoolGrid, box: Box | None = None) -> tuple[np.ndarray, int, 
     return np.ascontiguousarray(passable[r0:r1, c0:c1]), r0, c0
 
 
+def _shape_and_crop(passable: BoolGrid, box: Box | None) -> tuple[tuple[int, int], tuple[np.ndarray, int, int] | None]:
+    """The grid's shape and its passable cells' box as :func:`_crop` gives it (None: none passable)."""
+    if passable.dtype != np.bool_:
+        passable = passable.astype(bool)
+    return (int(passable.shape[0]), int(passable.shape[1])), _crop(passable, box)
+
+
+def _no_field(shape: tuple[int, int]) -> Field:
+    """The field of a source off the passable box: unreachable everywhere."""
+    return Field(np.full((0, 0), np.inf, dtype=np.float32), 0, 0, shape)
+
+
 def distance_fields(
     passable: BoolGrid,
     sources_rc: NDArray[np.integer],
@@ -579,12 +591,9 @@ def distance_fields(
     >>> (f.r0, f.c0, f.values.shape), f.full()[1].tolist()
     ((1, 1, (1, 3)), [inf, 0.0, 1.0, 2.0, inf])
     """
-    if passable.dtype != np.bool_:
-        passable = passable.astype(bool)
-    shape = (int(passable.shape[0]), int(passable.shape[1]))
-    cropped = _crop(passable, box)
+    shape, cropped = _shape_and_crop(passable, box)
     if cropped is None:
-        return [Field(np.full((0, 0), np.inf, dtype=np.float32), 0, 0, shape) for _ in range(len(sources_rc))]
+        return [_no_field(shape) for _ in range(len(sources_rc))]
     crop, r0, c0 = cropped
     search = _Searches(crop, None if targets_rc is None else _flat_inside(targets_rc, r0, c0, crop.shape))
 
@@ -592,7 +601,7 @@ def distance_fields(
         r, c = int(src[0]) - r0, int(src[1]) - c0
         if 0 <= r < crop.shape[0] and 0 <= c < crop.shape[1]:
             return Field(search(r, c, limit=limit), r0, c0, shape)
-        return Field(np.full((0, 0), np.inf, dtype=np.float32), 0, 0, shape)
+        return _no_field(shape)
 
     return map_threads(one, list(sources_rc))  # the kernel releases the GIL
 
@@ -622,12 +631,9 @@ def nearest_fields(
     """
     if len(must_rc) != len(sources_rc):
         raise ValueError(f"must_rc has {len(must_rc)} entries for {len(sources_rc)} sources; give one per source")
-    if passable.dtype != np.bool_:
-        passable = passable.astype(bool)
-    shape = (int(passable.shape[0]), int(passable.shape[1]))
-    cropped = _crop(passable, box)
+    shape, cropped = _shape_and_crop(passable, box)
     if cropped is None:
-        return [Field(np.full((0, 0), np.inf, dtype=np.float32), 0, 0, shape) for _ in range(len(sources_rc))]
+        return [_no_field(shape) for _ in range(len(sources_rc))]
     crop, r0, c0 = cropped
     search = _Searches(crop)
     nearest_of = search.padded(_flat_inside(nearest_of_rc, r0, c0, crop.shape))
@@ -635,7 +641,7 @@ def nearest_fields(
     def one(i: int) -> Field:
         r, c = int(sources_rc[i][0]) - r0, int(sources_rc[i][1]) - c0
         if not (0 <= r < crop.shape[0] and 0 <= c < crop.shape[1]):
-            return Field(np.full((0, 0), np.inf, dtype=np.float32), 0, 0, shape)
+            return _no_field(shape)
         own = search.padded(_flat_inside(must_rc[i], r0, c0, crop.shape))
         return Field(search(r, c, np.concatenate([own, nearest_of]), n_must=len(own)), r0, c0, shape)
 
