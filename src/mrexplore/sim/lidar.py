@@ -85,6 +85,44 @@ def cast_ray(
             return n, False
 
 
+@nb.njit(cache=True, inline="always")
+def _beam_buffers(range_cells: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - numba
+    """Scratch for :func:`cast_ray`: rows, columns and entry distances of a beam's cells, room for any beam."""
+    buf_len = int(4 * range_cells) + 8
+    return np.empty(buf_len, dtype=np.int64), np.empty(buf_len, dtype=np.int64), np.empty(buf_len, dtype=np.float64)
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _cast_and_mark(
+    occupied: np.ndarray,
+    sr: int,
+    sc: int,
+    direction: np.ndarray,
+    range_cells: float,
+    noise: float,
+    buf_r: np.ndarray,
+    buf_c: np.ndarray,
+    buf_t: np.ndarray,
+    mark: np.ndarray,
+) -> tuple[int, int]:  # pragma: no cover - numba
+    """Cast one beam and mark its cells (1 crossed, 2 where it ended on an obstacle), ``noise`` cells off its
+    reading; returns the last cell kept."""
+    n, hit = cast_ray(occupied, sr, sc, direction[0], direction[1], range_cells, buf_r, buf_c, buf_t)
+    end = n - 1
+    if hit and noise < 0.0:
+        # A short reading ends the beam inside free space; a long one cannot pass the wall.
+        measured = buf_t[end] + noise
+        while end > 0 and buf_t[end] > measured:
+            end -= 1
+    for i in range(end + 1):
+        r = buf_r[i]
+        c = buf_c[i]
+        v = _HIT if (hit and i == end) else _MISS
+        if v > mark[r, c]:
+            mark[r, c] = v
+    return buf_r[end], buf_c[end]
+
+
 @nb.njit(cache=True, nogil=True)
 def scan_mark(
     occupied: np.ndarray,
@@ -102,27 +140,10 @@ def scan_mark(
     :func:`apply_scan` then fuses the marks.
     """
     r0, r1, c0, c1 = sr, sr + 1, sc, sc + 1
-    buf_len = int(4 * range_cells) + 8
-    buf_r = np.empty(buf_len, dtype=np.int64)
-    buf_c = np.empty(buf_len, dtype=np.int64)
-    buf_t = np.empty(buf_len, dtype=np.float64)
+    buf_r, buf_c, buf_t = _beam_buffers(range_cells)
     for k in range(dirs.shape[0]):
-        n, hit = cast_ray(occupied, sr, sc, dirs[k, 0], dirs[k, 1], range_cells, buf_r, buf_c, buf_t)
-        end = n - 1
-        if hit and noise_cells[k] < 0.0:
-            # A short reading ends the beam inside free space; a long one cannot pass the wall.
-            measured = buf_t[end] + noise_cells[k]
-            while end > 0 and buf_t[end] > measured:
-                end -= 1
-        for i in range(end + 1):
-            r = buf_r[i]
-            c = buf_c[i]
-            v = _HIT if (hit and i == end) else _MISS
-            if v > mark[r, c]:
-                mark[r, c] = v
+        r, c = _cast_and_mark(occupied, sr, sc, dirs[k], range_cells, noise_cells[k], buf_r, buf_c, buf_t, mark)
         # The last cell kept is the farthest one of the beam: it bounds the window.
-        r = buf_r[end]
-        c = buf_c[end]
         r0 = min(r0, r)
         r1 = max(r1, r + 1)
         c0 = min(c0, c)
@@ -137,7 +158,8 @@ def _beam_moves(
     """Each beam of :func:`cast_ray` from a cell's centre on an open grid, as moves: ``(n_rays, L) uint8``
     (1: a column step, 0: a row step), the cells it enters within range (its source among them), and the
     sign of its row and column steps."""
-    buf_len = int(4 * range_cells) + 8
+    buf_r, buf_c, buf_t = _beam_buffers(range_cells)
+    buf_len = buf_r.shape[0]
     side = 2 * buf_len + 3
     open_grid = np.zeros((side, side), dtype=np.bool_)
     o = buf_len + 1
@@ -146,9 +168,6 @@ def _beam_moves(
     count = np.zeros(n_rays, dtype=np.int64)
     sign_r = np.zeros(n_rays, dtype=np.int64)
     sign_c = np.zeros(n_rays, dtype=np.int64)
-    buf_r = np.empty(buf_len, dtype=np.int64)
-    buf_c = np.empty(buf_len, dtype=np.int64)
-    buf_t = np.empty(buf_len, dtype=np.float64)
     for k in range(n_rays):
         n, _ = cast_ray(open_grid, o, o, dirs[k, 0], dirs[k, 1], range_cells, buf_r, buf_c, buf_t)
         count[k] = n
@@ -183,23 +202,10 @@ def _mark_by_moves(
     r0, r1, c0, c1 = sr, sr + 1, sc, sc + 1
     reach = moves.shape[1] + 1
     inside = sr - reach >= 0 and sr + reach < H and sc - reach >= 0 and sc + reach < W  # no beam leaves the grid
-    buf_len = int(4 * range_cells) + 8
-    buf_r = np.empty(buf_len, dtype=np.int64)
-    buf_c = np.empty(buf_len, dtype=np.int64)
-    buf_t = np.empty(buf_len, dtype=np.float64)
+    buf_r, buf_c, buf_t = _beam_buffers(range_cells)
     for k in range(moves.shape[0]):
         if noise_cells[k] < 0.0:
-            n, hit = cast_ray(occupied, sr, sc, dirs[k, 0], dirs[k, 1], range_cells, buf_r, buf_c, buf_t)
-            end = n - 1
-            if hit:
-                measured = buf_t[end] + noise_cells[k]
-                while end > 0 and buf_t[end] > measured:
-                    end -= 1
-            for i in range(end + 1):
-                v = _HIT if (hit and i == end) else _MISS
-                if v > mark[buf_r[i], buf_c[i]]:
-                    mark[buf_r[i], buf_c[i]] = v
-            r, c = buf_r[end], buf_c[end]
+            r, c = _cast_and_mark(occupied, sr, sc, dirs[k], range_cells, noise_cells[k], buf_r, buf_c, buf_t, mark)
         else:
             dr, dc = sign_r[k], sign_c[k]
             r, c = sr, sc
