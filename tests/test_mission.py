@@ -12,6 +12,8 @@ from hypothesis import strategies as st
 from scipy import ndimage
 
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, PreprocessConfig, SimConfig
+from mrexplore.maps.floorplan import FloorplanSpec, generate_floorplan
+from mrexplore.maps.ground_truth import GridFrame, GroundTruthMap
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, run_mission
 from mrexplore.paths.far_field import NearFarField
@@ -241,6 +243,42 @@ def test_nearest_poses_every_distance_for_another_planner() -> None:
         assert posed.problem is not None
         left = posed.problem.clusters.centers_rc[:, 1].tolist().index(1)
         assert posed.problem.dist_cells[0, left] == 1.0 and posed.problem.dist_cells[0, 1 - left] == right
+        assert (posed.problem.robot_dist_cells is None) == own
+
+
+def test_ncm_searches_only_its_window_and_explores_the_same() -> None:
+    # NCM allows a robot only the nodes within its 24 m window (or, with none reachable there, every
+    # node), so its own decisions search no farther; on a 64 m floor the mission is the same as with
+    # whole searches, step for step.
+    occupied = generate_floorplan(FloorplanSpec(seed=2, width_m=64.0, height_m=12.0, corridor_m=2.0), 0.2)
+    truth = GroundTruthMap(occupied, GridFrame(occupied.shape[0], occupied.shape[1], 0.2), "long")
+    windowed = make_strategy("ncm")
+    assert windowed.window_reads
+    runs = [
+        run_mission(truth, pipeline, SimConfig(robots=3), MissionConfig(max_steps=3000), seed=1)
+        for pipeline in (windowed, replace(windowed, window_reads=False))
+    ]
+    a, b = ({k: v for k, v in r.measures.to_dict().items() if k not in TIMING_KEYS} for r in runs)
+    assert a == b and a["decisions"] > 10 and a["coverage"] > 0.99
+    assert np.array_equal(runs[0].coverage_curve, runs[1].coverage_curve)
+
+
+@pytest.mark.parametrize(("col", "far"), [(10, np.inf), (30, 28.0)])
+def test_ncm_poses_its_window_for_itself_and_every_distance_for_another_planner(col: int, far: float) -> None:
+    # At 1 m a cell: nodes on the left end (column 1) and the right end (column 58). From column 10 the
+    # left end is in the 24 m window and the right end, 48 m away, is not: NCM's own search stops at the
+    # left end. From column 30 neither end is in the window, so NCM may take any node and reads both.
+    state = state_grid("#" * 60 + "\n" + ("?" + "." * 58 + "?\n") * 3 + "#" * 60)
+    pipeline = make_strategy("ncm")
+    robots = np.array([[2, col]], np.int32)
+    whole = {1: col - 1.0, 58: 58.0 - col}  # the middle row's nodes, straight along the corridor
+    for own in (False, True):
+        posed = pipeline.pose(state, robots, 1.0, own_planner=own)
+        assert posed.problem is not None
+        centres = posed.problem.clusters.centers_rc.tolist()
+        at = {c: posed.problem.dist_cells[0, centres.index([2, c])] for c in (1, 58)}
+        right = far if own else whole[58]
+        assert at == {1: whole[1], 58: right}
         assert (posed.problem.robot_dist_cells is None) == own
 
 

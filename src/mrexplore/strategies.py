@@ -25,7 +25,7 @@ from mrexplore.global_planning.coscan import (
     tasks_in_reach,
     two_opt_tour,
 )
-from mrexplore.global_planning.ncm_nodes import ncm_frontier, pool_nodes
+from mrexplore.global_planning.ncm_nodes import in_window, ncm_frontier, pool_nodes
 from mrexplore.global_planning.oracle import plan_oracle_routes
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem, GlobalPlanner
 from mrexplore.local_planning.router import LocalRouter
@@ -276,6 +276,16 @@ class ExplorationPipeline:
     def prepare(self, truth: GroundTruthMap, starts_rc: NDArray[np.integer], sim: SimConfig) -> None:
         """Called once before a mission; only a yardstick that knows the map uses it."""
 
+    def own_reads(
+        self, robots_rc: NDArray[np.int32], clusters: Clusters, resolution_m: float
+    ) -> list[NDArray[np.int32]] | None:
+        """The cluster centres at which this pipeline's own planner reads each robot's distance, where it
+        reads fewer than all (None: all, the default). Its own decisions' exact searches (:meth:`decide`)
+        then stop once each robot has reached its own (and its goal, for hysteresis); a centre left unread
+        reads ``inf`` or its exact distance. A planner must then never pick, for robot i, a centre
+        outside ``own_reads(...)[i]`` that read ``inf``; the paths to the centres it picks are exact."""
+        return None
+
     def _committed(
         self,
         clusters: Clusters,
@@ -391,13 +401,19 @@ class ExplorationPipeline:
         # goals. Each search stops once it has them all (a strategy that asked for fields has them).
         targets = np.vstack([clusters.centers_rc, clusters.members_rc, robots_rc, *goals])
         own = goals if self.commitment < 1 else []  # a robot's own goal is read for hysteresis only
-        nearest = self.nearest_only and own_planner and far is None and not computed
+        exact_own = own_planner and far is None and not computed  # this pipeline's planner, exact searches
+        nearest = self.nearest_only and exact_own
+        reads = self.own_reads(robots_rc, clusters, resolution_m) if exact_own and not nearest else None
         if computed:  # the strategy's candidates asked for them
             fields = computed[0]
         elif nearest:
             # Each robot's nearest centre (ties too) and its own goal are all the planner and the paths read.
             mine = own if own else [_NO_ROUTE] * n
             fields = list(nearest_fields(passable, robots_rc, clusters.centers_rc, mine, box=box))
+        elif reads is not None:
+            # Each robot's own centres (and its goal) are all the planner and the paths read.
+            mine = [np.vstack([r, *own[i : i + 1]]) for i, r in enumerate(reads)]
+            fields = list(nearest_fields(passable, robots_rc, _NO_ROUTE, mine, box=box))
         elif far is None:
             fields = list(distance_fields(passable, robots_rc, targets, box=box))
         else:
@@ -407,6 +423,7 @@ class ExplorationPipeline:
         if not np.isfinite(dist).any():
             return PosedDecision(None, _ended(planning, frontiers, clusters, n, "no_reachable_frontiers"))
         robots = np.asarray(robots_rc, np.int32)
+        stopped = nearest or reads is not None  # the searches stopped before reaching the other robots
         problem = AssignmentProblem(
             robots,
             clusters,
@@ -414,7 +431,7 @@ class ExplorationPipeline:
             resolution_m,
             planning,
             current_cluster=_current_clusters(clusters, current, n),
-            robot_dist_cells=None if nearest else np.stack([distances_at(f, robots) for f in fields]),
+            robot_dist_cells=None if stopped else np.stack([distances_at(f, robots) for f in fields]),
             rng=rng,
         )
         return PosedDecision(problem, None, _Posed(frontiers, fields, passable, kept, cand))
@@ -654,6 +671,24 @@ class NcmPipeline(ExplorationPipeline):
     per cluster; its planner (:class:`~mrexplore.global_planning.learned.ncm_network.NcmPlanner`) lets
     every robot pick a node; robots drive to their node. Where no frontier cell keeps clear of obstacles
     (passages under 0.4 m wide) the plain F_un cells are pooled instead."""
+
+    window_reads: bool = True
+    """Its own decisions' exact searches stop once each robot has reached the nodes within NCM's window
+    (:data:`~mrexplore.global_planning.ncm_nodes.WINDOW_M`), all its planner reads (:meth:`own_reads`);
+    False: whole searches (the same decisions, slower)."""
+
+    def own_reads(
+        self, robots_rc: NDArray[np.int32], clusters: Clusters, resolution_m: float
+    ) -> list[NDArray[np.int32]] | None:
+        """Each robot's nodes within NCM's window; all nodes for a robot with none there. NCM's planner
+        allows robot i only the nodes it reaches within its window (:func:`in_window`, the test its input
+        makes), or, where it reaches none there, every node it reaches. A search that settles the window's
+        nodes has their exact distances; one that ends without settling them has searched the robot's whole
+        component, so every node's distance is exact, and ``inf`` where unreachable."""
+        if not self.window_reads:
+            return None
+        near = in_window(robots_rc, clusters.centers_rc, resolution_m)
+        return [clusters.centers_rc[row] if row.any() else clusters.centers_rc for row in near]
 
     def candidates(self, q: CandidateQuery) -> CandidateSet:
         un = np.zeros(q.state.shape, dtype=bool)

@@ -18,12 +18,16 @@ from mrexplore.boxes import cells_of
 from mrexplore.preprocessing.frontiers import Frontiers
 from mrexplore.types import BoolGrid, CellState, StateGrid
 
-__all__ = ["ncm_frontier", "pool_nodes", "CLEARANCE_M", "POOL_M"]
+__all__ = ["ncm_frontier", "pool_nodes", "in_window", "CLEARANCE_M", "POOL_M", "WINDOW_M", "POSITION_SCALE_M"]
 
 CLEARANCE_M = 0.2
 """Frontier cells closer than this to an obstacle are dropped (NCM dilates obstacles by 0.2 m)."""
 POOL_M = 0.4
 """Side of the pooling blocks (NCM's 0.4 m node grid)."""
+WINDOW_M = 24.0
+"""Nodes farther than this (straight line) from a robot are outside its window (NCM's local map)."""
+POSITION_SCALE_M = 24.0
+"""Coordinates and distances enter NCM's network divided by this."""
 
 
 def ncm_frontier(
@@ -86,3 +90,25 @@ def pool_nodes(frontier: BoolGrid, resolution_m: float, pool_m: float = POOL_M) 
     first = np.ones(len(order), dtype=bool)
     first[1:] = block_id[order][1:] != block_id[order][:-1]
     return rc[order[first]].astype(np.int32)
+
+
+def in_window(
+    robots_rc: NDArray[np.integer],
+    nodes_rc: NDArray[np.integer],
+    resolution_m: float,
+    window_m: float = WINDOW_M,
+    scale_m: float = POSITION_SCALE_M,
+) -> NDArray[np.bool_]:
+    """``(m, n) bool`` whether node j lies within ``window_m`` of robot i in a straight line, computed as the
+    network's input computes it (from float32 coordinates over ``scale_m``), so that a caller deciding
+    which distances NCM reads gets the same pairs, bit for bit.
+
+    Examples
+    --------
+    >>> in_window(np.array([[0, 0]]), np.array([[0, 240], [0, 241], [240, 1]]), 0.1).tolist()
+    [[True, False, False]]
+    """
+    robots = (np.asarray(robots_rc) * resolution_m / scale_m).astype(np.float32)
+    nodes = (np.asarray(nodes_rc) * resolution_m / scale_m).astype(np.float32)
+    euclid = np.sqrt(((robots[:, None, :] - nodes[None, :, :]) ** 2).sum(-1)) * scale_m
+    return euclid <= window_m

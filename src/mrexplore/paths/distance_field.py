@@ -620,7 +620,7 @@ def nearest_fields(
     Every finite value is exact; the candidates as near as the nearest (ties) are among them, the farther
     ones read ``inf``, as does every cell farther from the source than all it had to reach. Paths to the
     cells reached are read off as from a whole field. ``must_rc``: ``(k_i, 2) int`` per source (empty for
-    none).
+    none); ``nearest_of_rc`` empty: each search stops once it has its own cells alone.
 
     Examples
     --------

@@ -30,6 +30,7 @@ from mrexplore.global_planning.learned.ncm_policy import (
     per_robot_sample,
 )
 from mrexplore.global_planning.learned.sinkhorn import log_optimal_transport
+from mrexplore.global_planning.ncm_nodes import POSITION_SCALE_M, WINDOW_M, in_window
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 from mrexplore.threads import thread_count
 
@@ -147,12 +148,6 @@ class NcmNet(nn.Module):
         return out
 
 
-WINDOW_M = 24.0
-"""Nodes farther than this (straight line) from a robot are outside its window (NCM's local map)."""
-POSITION_SCALE_M = 24.0
-"""Coordinates and distances enter the network divided by this."""
-
-
 @dataclass(frozen=True)
 class NcmInputs:
     """One decision's input as plain arrays (what a PPO batch stores): robots_xy ``(m, 2)``, nodes_xy
@@ -175,8 +170,7 @@ def ncm_inputs(problem: AssignmentProblem, window_m: float = WINDOW_M, scale_m: 
     nodes = (problem.clusters.centers_rc * res / scale_m).astype(np.float32)
     d = (problem.dist_cells * res / scale_m).astype(np.float32)
     reachable = np.isfinite(d)
-    euclid = np.sqrt(((robots[:, None, :] - nodes[None, :, :]) ** 2).sum(-1)) * scale_m
-    allowed = reachable & (euclid <= window_m)
+    allowed = reachable & in_window(problem.robots_rc, problem.clusters.centers_rc, res, window_m, scale_m)
     none_near = ~allowed.any(axis=1)
     allowed[none_near] = reachable[none_near]
     return NcmInputs(robots, nodes, np.where(reachable, d, 0.0).astype(np.float32), allowed)
