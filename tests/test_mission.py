@@ -17,8 +17,9 @@ from mrexplore.maps.ground_truth import GridFrame, GroundTruthMap
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, run_mission
 from mrexplore.paths.far_field import NearFarField
+from mrexplore.preprocessing.clustering import Clusters
 from mrexplore.preprocessing.frontiers import Frontiers
-from mrexplore.strategies import _denoised_un, make_strategy
+from mrexplore.strategies import CandidateSet, _denoised_un, make_strategy
 from mrexplore.types import MrExploreError
 
 TIMING_KEYS = {"wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb", "onboard_ms_median", "onboard_ms_p95"}
@@ -218,10 +219,10 @@ def test_nearest_stops_its_searches_at_each_robots_nearest_cluster_and_explores_
     # farther; the mission is the same as with whole searches, step for step, with and without hysteresis.
     for commitment in (None, 1.0):
         stopped = make_strategy("nearest", GlobalPlanningConfig(commitment=commitment))
-        assert stopped.nearest_only
+        assert stopped.nearest_only and stopped.stop_searches
         runs = [
             run_mission(small_map, pipeline, SimConfig(robots=3), MissionConfig(max_steps=400), seed=4)
-            for pipeline in (stopped, replace(stopped, nearest_only=False))
+            for pipeline in (stopped, replace(stopped, stop_searches=False))
         ]
         a, b = ({k: v for k, v in r.measures.to_dict().items() if k not in TIMING_KEYS} for r in runs)
         assert a == b and a["decisions"] > 10
@@ -253,13 +254,29 @@ def test_ncm_searches_only_its_window_and_explores_the_same() -> None:
     occupied = generate_floorplan(FloorplanSpec(seed=2, width_m=64.0, height_m=12.0, corridor_m=2.0), 0.2)
     truth = GroundTruthMap(occupied, GridFrame(occupied.shape[0], occupied.shape[1], 0.2), "long")
     windowed = make_strategy("ncm")
-    assert windowed.window_reads
     runs = [
         run_mission(truth, pipeline, SimConfig(robots=3), MissionConfig(max_steps=3000), seed=1)
-        for pipeline in (windowed, replace(windowed, window_reads=False))
+        for pipeline in (windowed, replace(windowed, stop_searches=False))
     ]
     a, b = ({k: v for k, v in r.measures.to_dict().items() if k not in TIMING_KEYS} for r in runs)
     assert a == b and a["decisions"] > 10 and a["coverage"] > 0.99
+    assert np.array_equal(runs[0].coverage_curve, runs[1].coverage_curve)
+
+
+def test_oracle_searches_only_to_each_robots_next_viewpoint_and_explores_the_same(small_map) -> None:
+    # Each robot owns its route, so its path to the route's first viewpoint is all its search is read for.
+    oracle = make_strategy("oracle")
+    robots = np.array([[20, 20], [60, 100]], np.int32)
+    heads = np.array([[22, 20], [60, 98]], np.int32)
+    routes = Clusters(heads, np.ones(2, np.int32), heads, np.arange(2, dtype=np.int32))
+    cand = CandidateSet(routes, owners=np.array([1, 0]))  # robot 1 owns the first route
+    assert [r.tolist() for r in oracle.own_reads(robots, cand, 0.1)] == [[[60, 98]], [[22, 20]]]
+    runs = [
+        run_mission(small_map, pipeline, SimConfig(robots=3), MissionConfig(max_steps=2000), seed=2)
+        for pipeline in (oracle, replace(oracle, stop_searches=False))
+    ]
+    a, b = ({k: v for k, v in r.measures.to_dict().items() if k not in TIMING_KEYS} for r in runs)
+    assert a == b and a["decisions"] > 3 and a["coverage"] > 0.99
     assert np.array_equal(runs[0].coverage_curve, runs[1].coverage_curve)
 
 

@@ -261,9 +261,13 @@ class ExplorationPipeline:
     policy: dict[str, str] | None = None
     """Where a learned planner's weights came from: ``{"path", "sha256", "code_version"}``; None: no network."""
     nearest_only: bool = False
-    """The planner reads only each robot's nearest cluster (and its current goal's, for hysteresis): in the
-    pipeline's own decisions (:meth:`decide`) each exact search stops there (:func:`nearest_fields`); a
-    problem posed for another planner (:meth:`pose`) has every distance."""
+    """The planner reads only each robot's nearest cluster (and its current goal's, for hysteresis)
+    (:meth:`own_reads`)."""
+    stop_searches: bool = True
+    """Where the planner and the routes read fewer distances than every robot's to every centre
+    (:meth:`own_reads`), the pipeline's own decisions (:meth:`decide`) stop each exact search once it has
+    those (:func:`nearest_fields`); a problem posed for another planner (:meth:`pose`) has every distance.
+    False: whole searches, the same decisions (for tests and timings)."""
     distances: GlobalPlanningConfig = field(default_factory=GlobalPlanningConfig)
     """Where robot distances stop being exact on large maps (``far_above_cells``, ``exact_radius_m``,
     ``coarse_cell_m``, ``portal_sector_blocks``)."""
@@ -277,14 +281,17 @@ class ExplorationPipeline:
         """Called once before a mission; only a yardstick that knows the map uses it."""
 
     def own_reads(
-        self, robots_rc: NDArray[np.int32], clusters: Clusters, resolution_m: float
+        self, robots_rc: NDArray[np.int32], candidates: CandidateSet, resolution_m: float
     ) -> list[NDArray[np.int32]] | None:
-        """The cluster centres at which this pipeline's own planner reads each robot's distance, where it
-        reads fewer than all (None: all, the default). Its own decisions' exact searches (:meth:`decide`)
-        then stop once each robot has reached its own (and its goal, for hysteresis); a centre left unread
-        reads ``inf`` or its exact distance. A planner must then never pick, for robot i, a centre
-        outside ``own_reads(...)[i]`` that read ``inf``; the paths to the centres it picks are exact."""
-        return None
+        """The cells, per robot, at which this pipeline's own planner and routes read its distance besides
+        its nearest centre (and its goal, for hysteresis), where that is fewer than every centre's; None:
+        every centre's (the default). With :attr:`stop_searches` its own decisions' exact searches stop
+        once each robot has settled those, its goal and its nearest centre: every centre left unread then
+        reads ``inf`` or its exact distance, and one reads finite wherever any centre is reachable (the
+        decision's end is the same). The planner must never pick for robot i a centre outside its cells
+        that read ``inf``, and the routes' first targets must be among the cells (their paths are read).
+        :attr:`nearest_only`: none besides the nearest."""
+        return [_NO_ROUTE] * len(robots_rc) if self.nearest_only else None
 
     def _committed(
         self,
@@ -363,7 +370,7 @@ class ExplorationPipeline:
         one decision to the next and robots turn back and forth. ``frontiers``: those of ``state`` where the
         caller has them (the centre keeps them where the grid changed; None: detected here).
         ``own_planner``: the problem goes to this pipeline's own planner only (:meth:`decide`), so the
-        searches may stop where it stops reading (:attr:`nearest_only`).
+        searches may stop where it stops reading (:meth:`own_reads`, :attr:`stop_searches`).
         """
         if frontiers is None:
             frontiers = detect_frontiers(state)
@@ -401,19 +408,15 @@ class ExplorationPipeline:
         # goals. Each search stops once it has them all (a strategy that asked for fields has them).
         targets = np.vstack([clusters.centers_rc, clusters.members_rc, robots_rc, *goals])
         own = goals if self.commitment < 1 else []  # a robot's own goal is read for hysteresis only
-        exact_own = own_planner and far is None and not computed  # this pipeline's planner, exact searches
-        nearest = self.nearest_only and exact_own
-        reads = self.own_reads(robots_rc, clusters, resolution_m) if exact_own and not nearest else None
+        stop = self.stop_searches and own_planner and far is None and not computed
+        reads = self.own_reads(robots_rc, cand, resolution_m) if stop else None
         if computed:  # the strategy's candidates asked for them
             fields = computed[0]
-        elif nearest:
-            # Each robot's nearest centre (ties too) and its own goal are all the planner and the paths read.
-            mine = own if own else [_NO_ROUTE] * n
-            fields = list(nearest_fields(passable, robots_rc, clusters.centers_rc, mine, box=box))
         elif reads is not None:
-            # Each robot's own centres (and its goal) are all the planner and the paths read.
+            # Each robot's own cells, its nearest centre (ties too) and its goal are all the planner and the
+            # paths read.
             mine = [np.vstack([r, *own[i : i + 1]]) for i, r in enumerate(reads)]
-            fields = list(nearest_fields(passable, robots_rc, _NO_ROUTE, mine, box=box))
+            fields = list(nearest_fields(passable, robots_rc, clusters.centers_rc, mine, box=box))
         elif far is None:
             fields = list(distance_fields(passable, robots_rc, targets, box=box))
         else:
@@ -423,7 +426,6 @@ class ExplorationPipeline:
         if not np.isfinite(dist).any():
             return PosedDecision(None, _ended(planning, frontiers, clusters, n, "no_reachable_frontiers"))
         robots = np.asarray(robots_rc, np.int32)
-        stopped = nearest or reads is not None  # the searches stopped before reaching the other robots
         problem = AssignmentProblem(
             robots,
             clusters,
@@ -431,7 +433,7 @@ class ExplorationPipeline:
             resolution_m,
             planning,
             current_cluster=_current_clusters(clusters, current, n),
-            robot_dist_cells=None if stopped else np.stack([distances_at(f, robots) for f in fields]),
+            robot_dist_cells=None if reads is not None else np.stack([distances_at(f, robots) for f in fields]),
             rng=rng,
         )
         return PosedDecision(problem, None, _Posed(frontiers, fields, passable, kept, cand))
@@ -672,23 +674,18 @@ class NcmPipeline(ExplorationPipeline):
     every robot pick a node; robots drive to their node. Where no frontier cell keeps clear of obstacles
     (passages under 0.4 m wide) the plain F_un cells are pooled instead."""
 
-    window_reads: bool = True
-    """Its own decisions' exact searches stop once each robot has reached the nodes within NCM's window
-    (:data:`~mrexplore.global_planning.ncm_nodes.WINDOW_M`), all its planner reads (:meth:`own_reads`);
-    False: whole searches (the same decisions, slower)."""
-
     def own_reads(
-        self, robots_rc: NDArray[np.int32], clusters: Clusters, resolution_m: float
+        self, robots_rc: NDArray[np.int32], candidates: CandidateSet, resolution_m: float
     ) -> list[NDArray[np.int32]] | None:
-        """Each robot's nodes within NCM's window; all nodes for a robot with none there. NCM's planner
-        allows robot i only the nodes it reaches within its window (:func:`in_window`, the test its input
-        makes), or, where it reaches none there, every node it reaches. A search that settles the window's
-        nodes has their exact distances; one that ends without settling them has searched the robot's whole
-        component, so every node's distance is exact, and ``inf`` where unreachable."""
-        if not self.window_reads:
-            return None
-        near = in_window(robots_rc, clusters.centers_rc, resolution_m)
-        return [clusters.centers_rc[row] if row.any() else clusters.centers_rc for row in near]
+        """Each robot's nodes within NCM's window (:data:`~mrexplore.global_planning.ncm_nodes.WINDOW_M`);
+        all nodes for a robot with none there. NCM's planner allows robot i only the nodes it reaches
+        within its window (:func:`in_window`, the test its input makes), or, where it reaches none there,
+        every node it reaches. A search that settles the window's nodes has their exact distances; one
+        that ends without settling them has searched the robot's whole component, so every node's distance
+        is exact, and ``inf`` where unreachable."""
+        centres = candidates.clusters.centers_rc
+        near = in_window(robots_rc, centres, resolution_m)
+        return [centres[row] if row.any() else centres for row in near]
 
     def candidates(self, q: CandidateQuery) -> CandidateSet:
         un = np.zeros(q.state.shape, dtype=bool)
@@ -745,6 +742,15 @@ class OraclePipeline(ExplorationPipeline):
         centres = np.stack([routes[i][0] for i in owners]).astype(np.int32)
         sizes = np.array([len(routes[i]) for i in owners], dtype=np.int32)
         return CandidateSet(Clusters(centres, sizes, members, labels), owners=owners)
+
+    def own_reads(
+        self, robots_rc: NDArray[np.int32], candidates: CandidateSet, resolution_m: float
+    ) -> list[NDArray[np.int32]] | None:
+        """Each robot's next viewpoint: the robots own their routes, so a path to its own route's first
+        target is all a robot's distances are read for."""
+        owners, centres = candidates.owners, candidates.clusters.centers_rc
+        assert owners is not None  # the oracle's candidates always name their owners
+        return [centres[owners == i] for i in range(len(robots_rc))]
 
     def route(self, i: int, k: int, problem: AssignmentProblem, work: _Posed) -> NDArray[np.int32]:
         """The robot's own route, in its order."""
