@@ -5,6 +5,8 @@
 #
 #   bash docs/results/table005/paired/run.sh OLD_CHECKOUT NEW_CHECKOUT OUT_DIR
 #
+# STRATEGIES=a,b,... runs those strategies alone (default: all seven).
+#
 # Each checkout is a worktree of this repository at the version to time, with ../shared beside it; both
 # run with this checkout's .venv and their own src. Writes OUT_DIR/{before,after}_{dev3,kth7}/.
 set -euo pipefail
@@ -13,7 +15,7 @@ new=$(realpath "$2")
 mkdir -p "$3"
 out=$(realpath "$3")
 python="$(cd "$(dirname "$0")/../../../../.venv/bin" && pwd)/python"  # not realpath: the venv's python is a link
-all="hier,hier-heuristic,utility,nearest,coscan,ncm,oracle"
+all="${STRATEGIES:-hier,hier-heuristic,utility,nearest,coscan,ncm,oracle}"
 
 run() {  # checkout, tag
   cd "$1"
