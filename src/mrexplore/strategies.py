@@ -37,7 +37,6 @@ from mrexplore.paths.distance_field import (
     distances_at,
     nearest_fields,
     pairwise_distances,
-    team_distances,
 )
 from mrexplore.paths.far_field import CoarseGrid, NearFarField, coarse_grid, far_fields, finer_side, path_to
 from mrexplore.paths.portals import PortalGraph
@@ -635,25 +634,14 @@ class CoScanPipeline(ExplorationPipeline):
             return CandidateSet(Clusters.empty(), "no_frontiers")
         passable = q.state == CellState.FREE
         cap = self.coscan.tasks_per_robot * n
-        if q.far is None:
-            # The tasks kept are the nearest to the team: one search from all the robots at once finds them
-            # (each task's distance bit for bit the smallest of the robots' own), and the robots' own searches
-            # then stop at those (far more tasks are dropped than kept: on a KTH floor with 8 robots, 160
-            # tasks at the median decision for 48 kept).
-            keep = cap_tasks(team_distances(passable, q.robots_rc, tasks), cap)
-            if len(keep) == 0:
-                return CandidateSet(Clusters.empty(), "no_reachable_frontiers")
-            tasks = tasks[keep]
-            d_robots = np.stack([distances_at(f, tasks) for f in q.fields(tasks)])
-        else:
-            # On a near/far map a robot's task beyond the coarse grid costs a search of its own; a task that
-            # cannot be among the kept ones needs none (the kept tasks and their distances stay the same).
-            needed = partial(tasks_in_reach, robots_rc=q.robots_rc, tasks_rc=tasks, max_tasks=cap)
-            d_robots = np.stack([distances_at(f, tasks) for f in q.fields(tasks, needed)])
-            keep = cap_tasks(d_robots.min(axis=0), cap)
-            if len(keep) == 0:
-                return CandidateSet(Clusters.empty(), "no_reachable_frontiers")
-            tasks, d_robots = tasks[keep], d_robots[:, keep]
+        # On a near/far map a robot's task beyond the coarse grid costs a search of its own; a task that cannot
+        # be among the kept ones needs none (the kept tasks and their distances stay the same).
+        needed = partial(tasks_in_reach, robots_rc=q.robots_rc, tasks_rc=tasks, max_tasks=cap)
+        d_robots = np.stack([distances_at(f, tasks) for f in q.fields(tasks, needed)])
+        keep = cap_tasks(d_robots.min(axis=0), cap)
+        if len(keep) == 0:
+            return CandidateSet(Clusters.empty(), "no_reachable_frontiers")
+        tasks, d_robots = tasks[keep], d_robots[:, keep]
         rows: TaskRows
         if q.far is None:
             # The whole matrix, made symmetric by the smaller of each pair's two float32 sums. Searching only

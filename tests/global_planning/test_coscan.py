@@ -10,7 +10,6 @@ from conftest import NARROW_GAP, bool_grid, state_grid
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mrexplore.config import MapConfig, MissionConfig, SimConfig
 from mrexplore.global_planning.coscan import (
     cap_tasks,
     lloyd_clusters,
@@ -19,11 +18,7 @@ from mrexplore.global_planning.coscan import (
     tour_length,
     two_opt_tour,
 )
-from mrexplore.maps.loaders import load_map
-from mrexplore.mission import run_mission
-from mrexplore.paths.distance_field import distance_fields
 from mrexplore.strategies import make_strategy
-from mrexplore.types import CellState
 
 
 def line(xs: list[float], robots: list[float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -251,37 +246,6 @@ def test_coscan_robot_fields_stop_once_they_reach_the_tasks() -> None:
     field = posed.work.fields[0]
     assert field.value(1, 1) == 4.0 and field.value(1, 5) == 0.0
     assert field.value(1, 28) == np.inf
-
-
-def test_coscan_keeps_the_tasks_and_distances_whole_fields_give_over_a_mission(monkeypatch) -> None:
-    # The kept tasks come from one search from the whole team, and the robots' own searches stop at them;
-    # at every decision of a mission they are the tasks, and the distances, that whole fields give.
-    from mrexplore.strategies import CoScanPipeline, _denoised_un
-
-    seen = []
-    candidates = CoScanPipeline.candidates
-
-    def spy(self, q):
-        out = candidates(self, q)
-        seen.append((self, q, out))
-        return out
-
-    monkeypatch.setattr(CoScanPipeline, "candidates", spy)
-    truth = load_map("generated:3", MapConfig(resolution_m=0.1))
-    run_mission(truth, make_strategy("coscan"), SimConfig(robots=3), MissionConfig(max_steps=300), seed=2)
-    dropped = 0
-    for pipeline, q, out in seen:
-        if out.ended is not None:
-            continue
-        un = _denoised_un(q.frontiers, q.blacklist, pipeline.preprocess.min_cluster_size)
-        tasks = sample_tasks(un, pipeline.coscan.task_spacing_m / q.resolution_m)
-        whole = distance_fields(q.state == CellState.FREE, q.robots_rc)
-        d = np.stack([f.at(tasks) for f in whole])
-        keep = cap_tasks(d.min(axis=0), pipeline.coscan.tasks_per_robot * len(q.robots_rc))
-        assert out.context.tasks_rc.tolist() == tasks[keep].tolist()
-        np.testing.assert_array_equal(out.context.d_robots, d[:, keep])
-        dropped += len(tasks) > len(keep)
-    assert len(seen) > 5 and dropped > 5  # most decisions drop tasks
 
 
 def test_near_far_coscan_decides_a_long_corridor_as_the_exact_one_does() -> None:

@@ -20,7 +20,6 @@ from mrexplore.paths.distance_field import (
     distances_at,
     nearest_fields,
     pairwise_distances,
-    team_distances,
 )
 
 
@@ -184,37 +183,6 @@ def test_fields_stopped_at_the_nearest_candidate_hold_it_its_ties_and_the_musts(
                 )
         else:
             assert not np.isfinite(stopped.at(candidates)).any()
-
-
-@settings(max_examples=80, deadline=None)
-@given(st.integers(0, 10**6))
-def test_team_distances_are_the_smallest_of_the_sources_own_bit_for_bit(seed: int) -> None:
-    # Random grids up to 300 cells a side, one to four sources: sums of diagonal moves round in float32
-    # from the first, so the joint search must keep the very sums the sources' own searches keep.
-    rng = np.random.default_rng(seed)
-    shape = (int(rng.integers(2, 300)), int(rng.integers(2, 300)))
-    passable = rng.random(shape) < rng.uniform(0.6, 0.95)
-    cells = np.argwhere(np.ones_like(passable))
-    sources = cells[rng.integers(0, len(cells), int(rng.integers(1, 5)))]
-    reads = cells[rng.integers(0, len(cells), 40)]
-    whole = np.stack([f.at(reads) for f in distance_fields(passable, sources)]).min(axis=0)
-    np.testing.assert_array_equal(team_distances(passable, sources, reads), whole)
-
-
-def test_team_distances_by_hand() -> None:
-    g = bool_grid(
-        """
-        ...#....
-        ...#....
-        ........
-    """,
-        ".",
-    )
-    sources = np.array([[0, 0], [0, 7]])
-    d = team_distances(g, sources, np.array([[0, 2], [0, 4], [2, 3], [1, 3], [0, 9]]))
-    # (0, 4): 3 from the right-hand source; (2, 3): 2 diagonals and 1 straight from the left one (3.83) or
-    # 2 diagonals and 2 straight from the right one (4.83); a wall cell and a cell off the grid read inf.
-    assert d.round(3).tolist() == [2.0, 3.0, 3.828, math.inf, math.inf]
 
 
 def test_a_field_stops_at_the_nearest_candidate_or_at_its_own_cells_beyond() -> None:

@@ -32,7 +32,6 @@ __all__ = [
     "Distances",
     "distance_field",
     "distance_fields",
-    "team_distances",
     "nearest_fields",
     "distance_matrix",
     "pairwise_distances",
@@ -647,39 +646,6 @@ def nearest_fields(
         return Field(search(r, c, np.concatenate([own, nearest_of]), n_must=len(own)), r0, c0, shape)
 
     return map_threads(one, list(range(len(sources_rc))))  # the kernel releases the GIL
-
-
-def team_distances(
-    passable: BoolGrid, sources_rc: NDArray[np.integer], cells_rc: NDArray[np.integer], box: Box | None = None
-) -> NDArray[np.float64]:
-    """``(k,) float64`` each cell's distance from its nearest source, in cells (``inf`` where none reaches
-    it), by one search from all the sources at once: bit for bit the smallest of :func:`distance_fields`'
-    values there. A search adds in float32 as one from a single source does, and the rounded sum is
-    monotone in what it adds to, so the smallest of the sources' sums into a cell is the one the joint
-    search keeps. ``box`` as :func:`distance_fields`.
-
-    Examples
-    --------
-    >>> g = np.ones((1, 9), bool); g[0, 4] = False
-    >>> team_distances(g, np.array([[0, 0], [0, 8]]), np.array([[0, 3], [0, 5], [0, 4]])).tolist()
-    [3.0, 3.0, inf]
-    """
-    cells = np.asarray(cells_rc, dtype=np.int64).reshape(-1, 2)
-    out = np.full(len(cells), np.inf)
-    _, cropped = _shape_and_crop(passable, box)
-    if cropped is None or len(cells) == 0:
-        return out
-    crop, r0, c0 = cropped
-    search = _Searches(crop)
-    src = _flat_inside(sources_rc, r0, c0, crop.shape)
-    q_node, q_key, _ = search.scratch()
-    field = _seeded_search(
-        search.start, search.wp, search.padded(src), np.zeros(len(src), np.float32), q_node, q_key
-    ).reshape(crop.shape[0] + 2, search.wp)[1:-1, 1:-1]
-    r, c = cells[:, 0] - r0, cells[:, 1] - c0
-    inside = (r >= 0) & (r < crop.shape[0]) & (c >= 0) & (c < crop.shape[1])
-    out[inside] = field[r[inside], c[inside]]
-    return out
 
 
 _PAIRWISE_SPLIT = 12
