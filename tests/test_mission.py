@@ -214,19 +214,26 @@ def test_commitment_keeps_a_robot_on_its_goal(commitment: float, goal: list[int]
     assert d.goals_rc.tolist() == [goal]
 
 
+def _as_with_whole_searches(truth, pipeline, steps: int, seed: int) -> dict:
+    """A mission's measures with the pipeline's stopped searches, having checked that they, and the coverage
+    curve, are those of the same mission with whole searches (``stop_searches=False``), step for step."""
+    runs = [
+        run_mission(truth, p, SimConfig(robots=3), MissionConfig(max_steps=steps), seed=seed)
+        for p in (pipeline, replace(pipeline, stop_searches=False))
+    ]
+    a, b = ({k: v for k, v in r.measures.to_dict().items() if k not in TIMING_KEYS} for r in runs)
+    assert a == b
+    assert np.array_equal(runs[0].coverage_curve, runs[1].coverage_curve)
+    return a
+
+
 def test_nearest_stops_its_searches_at_each_robots_nearest_cluster_and_explores_the_same(small_map) -> None:
     # nearest reads only each robot's nearest cluster and its own goal, so its own decisions search no
     # farther; the mission is the same as with whole searches, step for step, with and without hysteresis.
     for commitment in (None, 1.0):
         stopped = make_strategy("nearest", GlobalPlanningConfig(commitment=commitment))
         assert stopped.nearest_only and stopped.stop_searches
-        runs = [
-            run_mission(small_map, pipeline, SimConfig(robots=3), MissionConfig(max_steps=400), seed=4)
-            for pipeline in (stopped, replace(stopped, stop_searches=False))
-        ]
-        a, b = ({k: v for k, v in r.measures.to_dict().items() if k not in TIMING_KEYS} for r in runs)
-        assert a == b and a["decisions"] > 10
-        assert np.array_equal(runs[0].coverage_curve, runs[1].coverage_curve)
+        assert _as_with_whole_searches(small_map, stopped, 400, seed=4)["decisions"] > 10
 
 
 def test_nearest_poses_every_distance_for_another_planner() -> None:
@@ -253,14 +260,8 @@ def test_ncm_searches_only_its_window_and_explores_the_same() -> None:
     # whole searches, step for step.
     occupied = generate_floorplan(FloorplanSpec(seed=2, width_m=64.0, height_m=12.0, corridor_m=2.0), 0.2)
     truth = GroundTruthMap(occupied, GridFrame(occupied.shape[0], occupied.shape[1], 0.2), "long")
-    windowed = make_strategy("ncm")
-    runs = [
-        run_mission(truth, pipeline, SimConfig(robots=3), MissionConfig(max_steps=3000), seed=1)
-        for pipeline in (windowed, replace(windowed, stop_searches=False))
-    ]
-    a, b = ({k: v for k, v in r.measures.to_dict().items() if k not in TIMING_KEYS} for r in runs)
-    assert a == b and a["decisions"] > 10 and a["coverage"] > 0.99
-    assert np.array_equal(runs[0].coverage_curve, runs[1].coverage_curve)
+    m = _as_with_whole_searches(truth, make_strategy("ncm"), 3000, seed=1)
+    assert m["decisions"] > 10 and m["coverage"] > 0.99
 
 
 def test_oracle_searches_only_to_each_robots_next_viewpoint_and_explores_the_same(small_map) -> None:
@@ -271,13 +272,8 @@ def test_oracle_searches_only_to_each_robots_next_viewpoint_and_explores_the_sam
     routes = Clusters(heads, np.ones(2, np.int32), heads, np.arange(2, dtype=np.int32))
     cand = CandidateSet(routes, owners=np.array([1, 0]))  # robot 1 owns the first route
     assert [r.tolist() for r in oracle.own_reads(robots, cand, 0.1)] == [[[60, 98]], [[22, 20]]]
-    runs = [
-        run_mission(small_map, pipeline, SimConfig(robots=3), MissionConfig(max_steps=2000), seed=2)
-        for pipeline in (oracle, replace(oracle, stop_searches=False))
-    ]
-    a, b = ({k: v for k, v in r.measures.to_dict().items() if k not in TIMING_KEYS} for r in runs)
-    assert a == b and a["decisions"] > 3 and a["coverage"] > 0.99
-    assert np.array_equal(runs[0].coverage_curve, runs[1].coverage_curve)
+    m = _as_with_whole_searches(small_map, oracle, 2000, seed=2)
+    assert m["decisions"] > 3 and m["coverage"] > 0.99
 
 
 @pytest.mark.parametrize(("col", "far"), [(10, np.inf), (30, 28.0)])
