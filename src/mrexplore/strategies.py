@@ -404,9 +404,6 @@ class ExplorationPipeline:
             return PosedDecision(None, _ended(planning, frontiers, clusters, n, cand.ended))
         if len(clusters) == 0:
             return PosedDecision(None, _ended(planning, frontiers, clusters, n, "no_frontiers"))
-        # Every cell a field is read at from here on: centres, members (routes and goals), robots, current
-        # goals. Each search stops once it has them all (a strategy that asked for fields has them).
-        targets = np.vstack([clusters.centers_rc, clusters.members_rc, robots_rc, *goals])
         own = goals if self.commitment < 1 else []  # a robot's own goal is read for hysteresis only
         stop = self.stop_searches and own_planner and far is None and not computed
         reads = self.own_reads(robots_rc, cand, resolution_m) if stop else None
@@ -418,6 +415,9 @@ class ExplorationPipeline:
             mine = [np.vstack([r, *own[i : i + 1]]) for i, r in enumerate(reads)]
             fields = list(nearest_fields(passable, robots_rc, clusters.centers_rc, mine, box=box))
         elif far is None:
+            # Every cell a field is read at from here on: centres, members (routes and goals), robots,
+            # current goals. Each search stops once it has them all.
+            targets = np.vstack([clusters.centers_rc, clusters.members_rc, robots_rc, *goals])
             fields = list(distance_fields(passable, robots_rc, targets, box=box))
         else:
             fields = list(far.fields(passable, robots_rc, clusters.centers_rc, own))
