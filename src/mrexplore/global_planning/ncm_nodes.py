@@ -18,7 +18,17 @@ from mrexplore.boxes import cells_of
 from mrexplore.preprocessing.frontiers import Frontiers
 from mrexplore.types import BoolGrid, CellState, StateGrid
 
-__all__ = ["ncm_frontier", "pool_nodes", "in_window", "CLEARANCE_M", "POOL_M", "WINDOW_M", "POSITION_SCALE_M"]
+__all__ = [
+    "ncm_frontier",
+    "pool_nodes",
+    "in_window",
+    "scaled_xy",
+    "within_window",
+    "CLEARANCE_M",
+    "POOL_M",
+    "WINDOW_M",
+    "POSITION_SCALE_M",
+]
 
 CLEARANCE_M = 0.2
 """Frontier cells closer than this to an obstacle are dropped (NCM dilates obstacles by 0.2 m)."""
@@ -92,6 +102,23 @@ def pool_nodes(frontier: BoolGrid, resolution_m: float, pool_m: float = POOL_M) 
     return rc[order[first]].astype(np.int32)
 
 
+def scaled_xy(rc: NDArray[np.integer], resolution_m: float, scale_m: float = POSITION_SCALE_M) -> NDArray[np.float32]:
+    """Cells as NCM's network takes them: metres over ``scale_m``, float32."""
+    return (np.asarray(rc) * resolution_m / scale_m).astype(np.float32)
+
+
+def within_window(
+    robots_xy: NDArray[np.float32],
+    nodes_xy: NDArray[np.float32],
+    window_m: float = WINDOW_M,
+    scale_m: float = POSITION_SCALE_M,
+) -> NDArray[np.bool_]:
+    """``(m, n) bool`` whether node j lies within ``window_m`` of robot i in a straight line, from
+    :func:`scaled_xy` coordinates (the network's input and :func:`in_window` both test this way)."""
+    euclid = np.sqrt(((robots_xy[:, None, :] - nodes_xy[None, :, :]) ** 2).sum(-1)) * scale_m
+    return euclid <= window_m
+
+
 def in_window(
     robots_rc: NDArray[np.integer],
     nodes_rc: NDArray[np.integer],
@@ -99,16 +126,14 @@ def in_window(
     window_m: float = WINDOW_M,
     scale_m: float = POSITION_SCALE_M,
 ) -> NDArray[np.bool_]:
-    """``(m, n) bool`` whether node j lies within ``window_m`` of robot i in a straight line, computed as the
-    network's input computes it (from float32 coordinates over ``scale_m``), so that a caller deciding
-    which distances NCM reads gets the same pairs, bit for bit.
+    """:func:`within_window` from cells: the pairs the network's input allows by distance, bit for bit, so
+    that a caller deciding which distances NCM reads gets the same pairs.
 
     Examples
     --------
     >>> in_window(np.array([[0, 0]]), np.array([[0, 240], [0, 241], [240, 1]]), 0.1).tolist()
     [[True, False, False]]
     """
-    robots = (np.asarray(robots_rc) * resolution_m / scale_m).astype(np.float32)
-    nodes = (np.asarray(nodes_rc) * resolution_m / scale_m).astype(np.float32)
-    euclid = np.sqrt(((robots[:, None, :] - nodes[None, :, :]) ** 2).sum(-1)) * scale_m
-    return euclid <= window_m
+    return within_window(
+        scaled_xy(robots_rc, resolution_m, scale_m), scaled_xy(nodes_rc, resolution_m, scale_m), window_m, scale_m
+    )

@@ -30,7 +30,7 @@ from mrexplore.global_planning.learned.ncm_policy import (
     per_robot_sample,
 )
 from mrexplore.global_planning.learned.sinkhorn import log_optimal_transport
-from mrexplore.global_planning.ncm_nodes import POSITION_SCALE_M, WINDOW_M, in_window
+from mrexplore.global_planning.ncm_nodes import POSITION_SCALE_M, WINDOW_M, scaled_xy, within_window
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 from mrexplore.threads import thread_count
 
@@ -166,11 +166,11 @@ def ncm_inputs(problem: AssignmentProblem, window_m: float = WINDOW_M, scale_m: 
     node (NCM's window is its local map; on a large floor the last frontiers can lie beyond every robot's
     window, and a robot told nothing would stand still)."""
     res = problem.resolution_m
-    robots = (problem.robots_rc * res / scale_m).astype(np.float32)
-    nodes = (problem.clusters.centers_rc * res / scale_m).astype(np.float32)
+    robots = scaled_xy(problem.robots_rc, res, scale_m)
+    nodes = scaled_xy(problem.clusters.centers_rc, res, scale_m)
     d = (problem.dist_cells * res / scale_m).astype(np.float32)
     reachable = np.isfinite(d)
-    allowed = reachable & in_window(problem.robots_rc, problem.clusters.centers_rc, res, window_m, scale_m)
+    allowed = reachable & within_window(robots, nodes, window_m, scale_m)
     none_near = ~allowed.any(axis=1)
     allowed[none_near] = reachable[none_near]
     return NcmInputs(robots, nodes, np.where(reachable, d, 0.0).astype(np.float32), allowed)
