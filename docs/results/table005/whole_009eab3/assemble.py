@@ -74,9 +74,11 @@ def main() -> None:
             w.writerows(rows)
         write_report(out / "results.csv", out / "report.md", STRATEGIES, COMMANDS[half])
         cut = sum(r["done_reason"] == "max_steps" for r in rows)
-        print(f"{half}: {len(rows)} episodes, {cut} cut by the budget, largest peak {max(float(r['peak_mb']) for r in rows):.0f} MB")
+        peak = max(float(r["peak_mb"]) for r in rows)
+        print(f"{half}: {len(rows)} episodes, {cut} cut by the budget, largest peak {peak:.0f} MB")
     # The whole 3-robot run's time holds its learned episodes (on MKL's AVX-512 path, 4.88 and 8.30
-    # worker-minutes for hier and ncm, against 4.71 and 8.23 in the rerun with MKL pinned): the rerun's is left out.
+    # worker-minutes for hier and ncm, against 4.71 and 8.23 in the rerun with MKL pinned): the rerun's
+    # is left out.
     walls = {name: wall_s(folder) for name, (folder, _) in PARTS.items() if name != "3-robot half, learned (4d2a3ed)"}
     for name, s in walls.items():
         print(f"{name}: {s / 60:.1f} min wall")
