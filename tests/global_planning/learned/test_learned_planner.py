@@ -10,9 +10,10 @@ import pytest
 import torch
 
 from mrexplore.config import LearnedConfig, MapConfig, SimConfig
-from mrexplore.global_planning.classical import UtilityPlanner
+from mrexplore.global_planning.classical import UtilityPlanner, utility_cost
 from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS, default_policy_path, load_policy, save_policy
-from mrexplore.global_planning.learned.network import MultiGraphNet
+from mrexplore.global_planning.learned.features import graph_inputs
+from mrexplore.global_planning.learned.network import MultiGraphNet, collate
 from mrexplore.global_planning.learned.policy import LearnedPlanner
 from mrexplore.global_planning.protocol import AssignmentProblem
 from mrexplore.maps.loaders import load_map
@@ -29,22 +30,56 @@ def _untrained() -> MultiGraphNet:
     return MultiGraphNet(LearnedConfig(), VALUE_INPUTS).eval()
 
 
+def _random_problem(rng: np.random.Generator) -> AssignmentProblem:
+    R, C = int(rng.integers(1, 9)), int(rng.integers(1, 12))
+    centres = rng.integers(0, 50, size=(C, 2)).astype(np.int32)
+    sizes = rng.integers(2, 40, size=C).astype(np.int32)
+    dist = rng.integers(1, 60, size=(R, C)).astype(np.float64)  # whole cells: many exact ties
+    dist[rng.random((R, C)) < 0.2] = np.inf
+    clusters = Clusters(centres, sizes, np.repeat(centres, sizes, 0), np.repeat(np.arange(C, dtype=np.int32), sizes))
+    return AssignmentProblem(
+        rng.integers(0, 50, size=(R, 2)).astype(np.int32),
+        clusters,
+        dist,
+        0.1,
+        np.zeros((50, 50), np.uint8),
+        current_cluster=rng.integers(-1, C, size=R),
+    )
+
+
 def test_zero_residual_start_equals_utility_on_random_problems() -> None:
     rng = np.random.default_rng(0)
     planner, utility = LearnedPlanner(_untrained()), UtilityPlanner()
     for _ in range(200):
-        R, C = int(rng.integers(1, 9)), int(rng.integers(1, 12))
-        centres = rng.integers(0, 50, size=(C, 2)).astype(np.int32)
-        sizes = rng.integers(2, 40, size=C).astype(np.int32)
-        dist = rng.integers(1, 60, size=(R, C)).astype(np.float64)  # whole cells: many exact ties
-        dist[rng.random((R, C)) < 0.2] = np.inf
-        clusters = Clusters(
-            centres, sizes, np.repeat(centres, sizes, 0), np.repeat(np.arange(C, dtype=np.int32), sizes)
-        )
-        p = AssignmentProblem(
-            rng.integers(0, 50, size=(R, 2)).astype(np.int32), clusters, dist, 0.1, np.zeros((50, 50), np.uint8)
-        )
+        p = _random_problem(rng)
         assert planner.assign(p).cluster_of_robot.tolist() == utility.assign(p).cluster_of_robot.tolist()
+
+
+def test_a_silent_scoring_mlp_is_skipped_with_the_same_costs() -> None:
+    """Where the scoring MLP's last layer is zero (the shipped policy), the planner reads the edge path alone
+    and leaves the attention blocks unrun: the same costs, bit for bit, as the whole network's; any weight
+    of that layer brings the whole network back."""
+    net = _untrained()
+    net.set_edge_weights([-2.3, -2.9, -2.5, -0.14, 1.2])
+    planner = LearnedPlanner(net)
+    assert net.scores_nothing()
+    ran: list[int] = []
+    net.robot_in.register_forward_hook(lambda *_: ran.append(1))
+    rng = np.random.default_rng(3)
+    for _ in range(100):
+        p = _random_problem(rng)
+        _, affinity, _ = planner.affinity(p)
+        with torch.no_grad():
+            batch = collate([graph_inputs(p, net.cfg, planner.heuristic)])
+            whole = net.residual(*net.encode(batch), batch)[0, : p.n_robots, : len(p.clusters)].double().numpy()
+        cost = utility_cost(p, planner.heuristic) - net.cfg.base_scale * whole
+        assert np.array_equal(affinity, -cost / net.cfg.base_scale)
+    assert len(ran) == 100  # the hook: only the 100 whole-network checks above ran the blocks
+    with torch.no_grad():
+        net.score[-1].bias.fill_(0.5)
+    assert not net.scores_nothing()
+    planner.affinity(_random_problem(rng))
+    assert len(ran) == 101
 
 
 def test_zero_residual_hier_runs_exactly_as_hier_heuristic(tmp_path: Path) -> None:

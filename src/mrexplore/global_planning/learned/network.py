@@ -184,6 +184,15 @@ class MultiGraphNet(nn.Module):
         )
         return self.score(pair).squeeze(-1) + self.edge_path(batch)
 
+    def scores_nothing(self) -> bool:
+        """True where the scoring MLP's last layer is all zero (weights and bias): its part of the residual is
+        then zero whatever the nodes, and the residual is the linear edge path alone. So is an untrained
+        network, and a policy whose kept stage is a search generation (the shipped one)."""
+        last = self.score[-1]
+        assert isinstance(last, nn.Linear)
+        with torch.no_grad():
+            return not (bool(last.weight.any()) or (last.bias is not None and bool(last.bias.any())))
+
     @property
     def edge_weights(self) -> NDArray[np.float64]:
         """The linear edge path's weights, ``(EDGE_FEATURES,)``: residual += edges . w."""
