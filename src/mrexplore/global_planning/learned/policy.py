@@ -177,15 +177,16 @@ class LearnedPlanner:
                 # the learned assignment took a decision at 8 robots on the largest HouseExpo map). Where the
                 # edge path is zero too, the sign of a zero may differ, which subtracting it from the cost
                 # leaves without effect.
-                residual = self.net.edge_path(batch)[0, : g.n_robots, : g.n_clusters].double().numpy()
-                return g, utility_cost(problem, self.heuristic) - self.net.cfg.base_scale * residual, value
-            vr, vc = self.net.encode(batch)
-            residual = self.net.residual(vr, vc, batch)[0, : g.n_robots, : g.n_clusters].double().numpy()
-            if self.record is not None:
-                extra = torch.zeros(1, self.net.value_inputs)
-                if self.value_extra is not None:
-                    extra = torch.from_numpy(self.value_extra[None])
-                value = float(self.net.value_of(vr, vc, batch, extra)[0])
+                learned = self.net.edge_path(batch)
+            else:
+                vr, vc = self.net.encode(batch)
+                learned = self.net.residual(vr, vc, batch)
+                if self.record is not None:
+                    extra = torch.zeros(1, self.net.value_inputs)
+                    if self.value_extra is not None:
+                        extra = torch.from_numpy(self.value_extra[None])
+                    value = float(self.net.value_of(vr, vc, batch, extra)[0])
+        residual = learned[0, : g.n_robots, : g.n_clusters].double().numpy()
         cost = utility_cost(problem, self.heuristic) - self.net.cfg.base_scale * residual  # inf stays inf
         return g, cost, value
 
