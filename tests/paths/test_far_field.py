@@ -15,16 +15,16 @@ from hypothesis import strategies as st
 
 import mrexplore.paths.far_field as far_field
 from mrexplore.paths.astar import path_length_cells
-from mrexplore.paths.distance_field import _Searches, distance_fields
+from mrexplore.paths.distance_field import distance_fields
 from mrexplore.paths.far_field import (
     Field,
     NearFarField,
     _fewest_searches,
-    _seeded_search,
     coarse_grid,
     far_fields,
     path_to,
 )
+from mrexplore.paths.kernels import Searches, seeded_search
 
 
 def random_rooms(seed: int, shape: tuple[int, int] = (60, 80), walls: int = 12) -> np.ndarray:
@@ -50,10 +50,10 @@ def test_seeded_search_equals_dijkstra_from_many_starts(seed: int) -> None:
     picks = free[rng.choice(len(free), size=min(len(free), int(rng.integers(1, 6))), replace=False)]
     keys = rng.uniform(0, 6, len(picks)).astype(np.float32)
     order = np.argsort(keys, kind="stable")
-    s = _Searches(g)
+    s = Searches(g)
     q_node, q_key, _ = s.scratch()
     flat = s.padded(picks[order, 0] * g.shape[1] + picks[order, 1])
-    got = _seeded_search(s.start, s.wp, flat, keys[order], q_node, q_key).reshape(14, 17)[1:-1, 1:-1]
+    got = seeded_search(s.start, s.wp, flat, keys[order], q_node, q_key).reshape(14, 17)[1:-1, 1:-1]
     want = seeded_dijkstra(g, [(int(r), int(c), float(k)) for (r, c), k in zip(picks, keys, strict=True)])
     np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-4)
 
@@ -145,8 +145,8 @@ def test_a_cell_no_block_next_to_it_reaches_is_joined_to_the_robots_own_coarse_f
     assert grid is not None
     assert not np.isfinite([f.value(14, 80) for f in far_fields(g, sources, 10, 3, grid=grid)]).any()
     searches: list[str] = []
-    seeded = far_field._seeded_search
-    monkeypatch.setattr(far_field, "_seeded_search", lambda *a: searches.append("coarse") or seeded(*a))
+    seeded = far_field.seeded_search
+    monkeypatch.setattr(far_field, "seeded_search", lambda *a: searches.append("coarse") or seeded(*a))
     monkeypatch.setattr(type(grid), "exact_at", lambda *a: searches.append("exact"))
     fields = far_fields(g, sources, 10, 3, must_rc=cell, grid=grid)
     assert searches == ["coarse", "coarse"]  # the robots' own: none from the cell, no exact search
@@ -251,8 +251,8 @@ def test_a_shared_coarse_grid_gives_the_fields_a_grid_of_their_own_does() -> Non
 def test_a_search_stopped_at_a_radius_keeps_every_distance_within_it(seed: int, limit: float) -> None:
     g = random_rooms(seed, (30, 40), 8)
     src = np.argwhere(g)[np.random.default_rng(seed).integers(0, np.count_nonzero(g))]
-    whole = _Searches(g)(int(src[0]), int(src[1]))
-    stopped = _Searches(g)(int(src[0]), int(src[1]), limit=limit)
+    whole = Searches(g)(int(src[0]), int(src[1]))
+    stopped = Searches(g)(int(src[0]), int(src[1]), limit=limit)
     # In float64, as the kernel compares: float32 would round a limit just under 2 up to 2.0.
     within = whole.astype(np.float64) <= limit
     np.testing.assert_array_equal(stopped[within], whole[within])  # bit for bit: the same pops

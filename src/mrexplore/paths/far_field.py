@@ -26,16 +26,8 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import maximum_bipartite_matching
 
 from mrexplore.boxes import mask_box
-from mrexplore.paths.distance_field import (
-    Field,
-    _crop,
-    _descend_to_seed,
-    _search_into,
-    _Searches,
-    _seeded_search,
-    descend_path,
-    distance_fields,
-)
+from mrexplore.paths.distance_field import Field, descend_path, distance_fields
+from mrexplore.paths.kernels import Searches, descend_to_seed, passable_crop, search_into, seeded_search
 from mrexplore.paths.portals import PortalField, PortalGraph
 from mrexplore.threads import map_threads
 from mrexplore.types import BoolGrid, GridRC
@@ -75,7 +67,7 @@ def _tails(
                 rr, cc = r - reach + a, c - reach + b
                 if 0 <= rr < H and 0 <= cc < W and fine[rr, cc]:
                     best[(a + 1) * Wp + b + 1] = np.inf
-        _search_into(best, Wp, (reach + 1) * Wp + reach + 1, no_targets, False, q_node, q_key, is_target, np.inf)
+        search_into(best, Wp, (reach + 1) * Wp + reach + 1, no_targets, False, q_node, q_key, is_target, np.inf)
         br, bc = (r - r0) // f, (c - c0) // f
         j = 0
         for dr in range(-1, 2):
@@ -130,11 +122,11 @@ class CoarseGrid:
     """The ``(H, W) bool`` grid it was pooled from."""
     memo: dict[tuple[int, int], NDArray[np.float64]] = field(default_factory=dict)
     """:meth:`tails` already computed, by cell."""
-    _exact: list[tuple[_Searches, int, int]] = field(default_factory=list, repr=False, compare=False)
+    _exact: list[tuple[Searches, int, int]] = field(default_factory=list, repr=False, compare=False)
     """The fine grid's searches (:meth:`exact_at`), built on first use."""
     _finer: list[CoarseGrid | None] = field(default_factory=list, repr=False, compare=False)
     """:meth:`finer`, built on first use."""
-    _search: list[_Searches] = field(default_factory=list, repr=False, compare=False)
+    _search: list[Searches] = field(default_factory=list, repr=False, compare=False)
     """:attr:`search`, built on first use."""
     portals: PortalGraph | None = field(default=None, repr=False, compare=False)
     """The portal graph far distances are searched on (:mod:`~mrexplore.paths.portals`), brought up to
@@ -171,15 +163,15 @@ class CoarseGrid:
             portals.refresh(pooled, r0 // factor, c0 // factor)
         out = cls(pooled, factor, r0, c0, passable, portals=portals, finer_portals=finer_portals)
         if portals is None:
-            out._search.append(_Searches(pooled))  # every far field searches it: built before the threads
+            out._search.append(Searches(pooled))  # every far field searches it: built before the threads
         return out
 
     @property
-    def search(self) -> _Searches:
+    def search(self) -> Searches:
         """Searches over the blocks, built on first use (a grid whose far fields search its portal graph
         seldom needs them)."""
         if not self._search:
-            self._search.append(_Searches(self.passable))
+            self._search.append(Searches(self.passable))
         return self._search[0]
 
     def tails(self, cells: NDArray[np.int64]) -> NDArray[np.float64]:
@@ -201,11 +193,11 @@ class CoarseGrid:
         back from cluster centres the blocks do not reach, each of which built start values and touched
         fresh queues over the 4.9 M cells before."""
         if not self._exact:
-            cropped = _crop(self.fine)
+            cropped = passable_crop(self.fine)
             if cropped is None:
                 return np.full(len(cells_rc), np.inf)
             crop, r0, c0 = cropped
-            self._exact.append((_Searches(crop), r0, c0))
+            self._exact.append((Searches(crop), r0, c0))
         search, r0, c0 = self._exact[0]
         cells = np.asarray(cells_rc, np.int64).reshape(-1, 2)
         out = np.full(len(cells), np.inf)
@@ -365,7 +357,7 @@ def _one(passable: BoolGrid, grid: CoarseGrid, src: NDArray[np.integer], radius:
     s = grid.search
     q_node, q_key, _ = s.scratch()
     flat = s.padded(blocks[:, 0] * w + blocks[:, 1])
-    coarse = _seeded_search(s.start, s.wp, flat, keys, q_node, q_key).reshape(h + 2, w + 2)[1:-1, 1:-1]
+    coarse = seeded_search(s.start, s.wp, flat, keys, q_node, q_key).reshape(h + 2, w + 2)[1:-1, 1:-1]
     return NearFarField(seeds.near, float(radius), coarse, grid, seed_key)
 
 
@@ -645,7 +637,7 @@ def path_to(field: Field | NearFarField, passable: BoolGrid, src_rc: GridRC, goa
             blocks = blocks[(blocks[:, 0] >= 0) & (blocks[:, 0] < h) & (blocks[:, 1] >= 0) & (blocks[:, 1] < w)]
         else:
             assert field.coarse is not None and field.seed_key is not None
-            blocks = _descend_to_seed(field.coarse, g.passable, field.seed_key, start[0], start[1])
+            blocks = descend_to_seed(field.coarse, g.passable, field.seed_key, start[0], start[1])
         corridor[blocks[:, 0], blocks[:, 1]] = True
         # The exact part: from the seed's middle cell back to the robot.
         seed_mid = g.centres_rc(blocks[-1:])[0]
@@ -692,7 +684,7 @@ def _corridor_path(
         return np.zeros((0, 2), np.int32)
     if not (0 <= dst[0] < local.shape[0] and 0 <= dst[1] < local.shape[1]):
         return np.zeros((0, 2), np.int32)
-    s = _Searches(local, np.array([dst[0] * local.shape[1] + dst[1]], np.int64))
+    s = Searches(local, np.array([dst[0] * local.shape[1] + dst[1]], np.int64))
     d = s(*src)
     path = descend_path(Field.whole(np.ascontiguousarray(d)), local, dst)
     return path + np.array([r0, c0], np.int32) if len(path) else path

@@ -30,7 +30,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.paths.distance_field import _descend_to_seed, _seeded_search, _start_values
+from mrexplore.paths.kernels import descend_to_seed, seeded_search, start_values
 
 __all__ = ["PortalField", "PortalGraph"]
 
@@ -143,10 +143,10 @@ def _refresh(
         if n == 0:
             continue
         br0, bc0 = (slot // nsw) * S, (slot % nsw) * S
-        start = _start_values(G[br0 : br0 + S, bc0 : bc0 + S])
+        start = start_values(G[br0 : br0 + S, bc0 : bc0 + S])
         for k in range(n):
             seed[0] = (nodes[slot, k, 0] - br0 + 1) * Wp + nodes[slot, k, 1] - bc0 + 1
-            best = _seeded_search(start, Wp, seed, key, q_node, q_key)
+            best = seeded_search(start, Wp, seed, key, q_node, q_key)
             for j in range(n):
                 d = best[(nodes[slot, j, 0] - br0 + 1) * Wp + nodes[slot, j, 1] - bc0 + 1]
                 intra[slot, k, j] = d
@@ -341,8 +341,8 @@ def _fill(
     order = np.argsort(keys[:m], kind="mergesort")
     q_node = np.empty((2, S * S + 1), dtype=np.int32)
     q_key = np.empty((2, S * S + 1), dtype=np.float32)
-    start = _start_values(G[br0 : br0 + S, bc0 : bc0 + S])
-    best = _seeded_search(start, Wp, cells[:m][order], keys[:m][order], q_node, q_key)
+    start = start_values(G[br0 : br0 + S, bc0 : bc0 + S])
+    best = seeded_search(start, Wp, cells[:m][order], keys[:m][order], q_node, q_key)
     return best.reshape((S + 2, Wp))[1:-1, 1:-1].copy(), seed_key
 
 
@@ -439,7 +439,7 @@ def _chain(
             only[p % m] = 0.0
             f, key = _fill(G, S, slot, nodes, n_nodes, only, none_cells, none_keys)
             br0, bc0 = (slot // nsw) * S, (slot % nsw) * S
-            way = _descend_to_seed(
+            way = descend_to_seed(
                 f, G[br0 : br0 + S, bc0 : bc0 + S], key, nodes[slot, u % m, 0] - br0, nodes[slot, u % m, 1] - bc0
             )
             k = way.shape[0] - 1
@@ -633,7 +633,7 @@ class PortalField:
             return np.zeros((0, 2), np.int64), np.array([-1, -1], np.int64)
         br0, bc0 = (slot // g.nsw) * S, (slot % g.nsw) * S
         passable = g.grid[br0 : br0 + S, bc0 : bc0 + S]
-        down = _descend_to_seed(field, passable, seed_key, r - br0, c - bc0).astype(np.int64) + np.array([br0, bc0])
+        down = descend_to_seed(field, passable, seed_key, r - br0, c - bc0).astype(np.int64) + np.array([br0, bc0])
         u = int(g.node_at[int(down[-1, 0]), int(down[-1, 1])])
         if u < 0 or not self.dist[u] <= seed_key[down[-1, 0] - br0, down[-1, 1] - bc0]:
             return down, down[-1]  # down to one of the source's own seed blocks
@@ -644,7 +644,7 @@ class PortalField:
         ur, uc = (int(x) for x in g.nodes[slot, root % m])
         last = np.zeros((0, 2), np.int64)
         if math.isfinite(float(f[ur - br0, uc - bc0])):
-            way = _descend_to_seed(f, g.grid[br0 : br0 + S, bc0 : bc0 + S], key, ur - br0, uc - bc0)
+            way = descend_to_seed(f, g.grid[br0 : br0 + S, bc0 : bc0 + S], key, ur - br0, uc - bc0)
             last = way[1:].astype(np.int64) + np.array([br0, bc0])
         out = np.vstack([down, ways, last])
         return out, out[-1]
