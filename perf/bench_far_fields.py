@@ -22,10 +22,10 @@ import numpy as np
 from mrexplore.cli import run_script
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission
+from mrexplore.mission import Mission, MissionSpec
 from mrexplore.paths.distance_field import distance_fields
 from mrexplore.paths.far_field import far_fields
-from mrexplore.strategies import ExplorationPipeline, make_strategy
+from mrexplore.pipeline import ExplorationPipeline, make_strategy
 
 
 def _best_ms(repeats: int, fn, *args) -> tuple[float, list]:  # type: ignore[no-untyped-def]
@@ -58,14 +58,16 @@ def main() -> None:
         return real(self, passable, robots_rc, targets_rc, must_rc, own_rc, resolution_m, computed)
 
     ExplorationPipeline._fields = spy  # type: ignore[method-assign]
-    mission = Mission(truth, strategy, SimConfig(robots=args.robots), MissionConfig(max_steps=100_000), progress=False)
+    mission = Mission(
+        MissionSpec(truth, strategy, SimConfig(robots=args.robots), MissionConfig(max_steps=100_000)), progress=False
+    )
     radius, factor = round(args.radius_m / res), round(args.block_m / res)
     print(f"{truth.name}, {args.robots} robots, exact within {radius} cells, blocks of {factor} cells")
     for target in sorted(args.coverage):
         while mission.advance():
             caught.clear()
             mission.decide()
-            if mission.curve[-1] >= target and caught:
+            if mission.record.curve[-1] >= target and caught:
                 break
         if not caught:
             print(f"coverage {target}: the mission ended first")
@@ -80,7 +82,7 @@ def main() -> None:
         exact_pairs = int(np.count_nonzero(e[ok] <= radius))
         q = np.percentile(rel, [50, 90, 99, 100])
         print(
-            f"coverage {mission.curve[-1]:.3f} (step {mission.steps}), {len(centres)} centres, "
+            f"coverage {mission.record.curve[-1]:.3f} (step {mission.steps}), {len(centres)} centres, "
             f"{np.count_nonzero(passable):,} passable cells: exact fields {t_exact:.0f} ms, near/far {t_far:.0f} ms; "
             f"pairs {ok.sum()} ({exact_pairs} within the radius), estimate/exact - 1: median {q[0]:.4f}, "
             f"p90 {q[1]:.4f}, p99 {q[2]:.4f}, max {q[3]:.4f}, min {rel.min():.2e}; "

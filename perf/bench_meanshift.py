@@ -25,10 +25,10 @@ from sklearn.cluster import MeanShift
 from mrexplore.cli import run_script
 from mrexplore.config import MapConfig, MissionConfig, PreprocessConfig, SimConfig
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission
+from mrexplore.mission import Mission, MissionSpec
+from mrexplore.pipeline import make_strategy
 from mrexplore.preprocessing.clustering import bin_seeds, bounded_bandwidth, mean_shift
 from mrexplore.preprocessing.frontiers import detect_frontiers
-from mrexplore.strategies import make_strategy
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_step_and_decision import largest_houseexpo  # noqa: E402
@@ -46,11 +46,13 @@ def main() -> int:
     truth = load_map(args.map or largest_houseexpo(), MapConfig(resolution_m=0.05))
     late = args.from_coverage is not None
     budget = MissionConfig(100_000) if late else MissionConfig(args.steps)
-    mission = Mission(truth, make_strategy("utility"), SimConfig(robots=args.robots), budget, 0, progress=False)
+    mission = Mission(
+        MissionSpec(truth, make_strategy("utility"), SimConfig(robots=args.robots), budget, 0), progress=False
+    )
     sets = []
     while (not late or len(sets) < args.sets) and mission.advance():
         mission.decide()
-        if late and mission.curve[-1] < args.from_coverage:
+        if late and mission.record.curve[-1] < args.from_coverage:
             continue
         cells = detect_frontiers(mission.state).un_rc.astype(np.float64)
         if len(cells) > 2:

@@ -20,9 +20,9 @@ from mrexplore.global_planning.learned.checkpoint import load_policy
 from mrexplore.global_planning.learned.policy import LearnedPlanner
 from mrexplore.global_planning.protocol import AssignmentProblem
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission
+from mrexplore.mission import Mission, MissionSpec
+from mrexplore.pipeline import make_strategy
 from mrexplore.preprocessing.clustering import Clusters
-from mrexplore.strategies import make_strategy
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
 from bench_step_and_decision import HOUSEEXPO, largest_houseexpo  # noqa: E402
@@ -56,10 +56,13 @@ def inference_ms(robots: int, clusters: int, repeats: int = 200) -> tuple[float,
 def decision_ms(strategy: str, robots: int, steps: int) -> float:
     """Median ms of the centre's decisions over the first ``steps`` steps of a mission."""
     truth = load_map(largest_houseexpo())
-    m = Mission(truth, make_strategy(strategy), SimConfig(robots=robots), MissionConfig(steps, 10), 0, progress=False)
+    m = Mission(
+        MissionSpec(truth, make_strategy(strategy), SimConfig(robots=robots), MissionConfig(steps, 10), 0),
+        progress=False,
+    )
     while m.advance():
         m.decide()
-    return float(np.median(m.plan_ms))
+    return float(np.median(m.record.plan_ms))
 
 
 def main() -> int:

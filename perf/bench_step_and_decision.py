@@ -26,9 +26,9 @@ import numpy as np
 from mrexplore.cli import run_script
 from mrexplore.config import MapConfig, MissionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission
+from mrexplore.mission import Mission, MissionSpec
+from mrexplore.pipeline import make_strategy
 from mrexplore.sim.world import StepResult
-from mrexplore.strategies import make_strategy
 
 HOUSEEXPO = Path(__file__).resolve().parents[2] / "shared" / "maps" / "houseexpo"
 
@@ -51,11 +51,14 @@ def bench(
     truth = load_map(map_path, MapConfig(resolution_m=resolution_m))
     # The package's one replanning loop, with a decision at least every 10 steps (close to missions' rate).
     budget = steps if from_coverage is None else 100_000
-    m = Mission(truth, make_strategy(strategy), SimConfig(robots=robots), MissionConfig(budget, 10), 0, progress=False)
+    m = Mission(
+        MissionSpec(truth, make_strategy(strategy), SimConfig(robots=robots), MissionConfig(budget, 10), 0),
+        progress=False,
+    )
     if from_coverage is not None:
         while m.sim.coverage < from_coverage and m.advance():
             m.decide()
-    first_step, first_decision = m.steps, len(m.plan_ms)
+    first_step, first_decision = m.steps, len(m.record.plan_ms)
     step_ms: list[float] = []
     robot_ms: list[float] = []
     accounting_ms: list[float] = []
@@ -73,7 +76,7 @@ def bench(
         robot_ms.append(m.link.robot_ms / robots)
         # Timed apart since c000445; before, robot_ms held it (so the script still runs on older checkouts).
         accounting_ms.append(getattr(m.link, "accounting_ms", 0.0) / robots)
-    plan_ms = m.plan_ms[first_decision:]
+    plan_ms = m.record.plan_ms[first_decision:]
     return {
         "cells": truth.shape[0] * truth.shape[1],
         "coverage": m.sim.coverage,

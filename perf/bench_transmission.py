@@ -23,11 +23,11 @@ from mrexplore.cli import run_script
 from mrexplore.config import MissionConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import run_mission
+from mrexplore.pipeline import make_strategy
 from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
 from mrexplore.preprocessing.reconstruction import fill_paper, free_iou, reconstruct
 from mrexplore.preprocessing.sparse_codec import decode, encode
 from mrexplore.preprocessing.sparse_map import sparse_frontier_map
-from mrexplore.strategies import make_strategy
 from mrexplore.types import CellState
 
 

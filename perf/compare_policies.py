@@ -27,8 +27,8 @@ import numpy as np
 from mrexplore.bench.report import paired_bootstrap
 from mrexplore.cli import run_script
 from mrexplore.config import TrainConfig
-from mrexplore.global_planning.learned.search import relative_score
-from mrexplore.global_planning.learned.trainer import FRESH_SEED0, validate_policy
+from mrexplore.training.search import relative_score
+from mrexplore.training.trainer import FRESH_SEED0, validate_policy
 from mrexplore.types import MrExploreError
 
 TRAIN = Path(__file__).resolve().parents[2] / "shared" / "maps" / "train"

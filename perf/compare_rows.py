@@ -20,8 +20,8 @@ from pathlib import Path
 from mrexplore.cli import run_script
 from mrexplore.config import MapConfig, MissionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import run_mission
-from mrexplore.strategies import make_strategy
+from mrexplore.mission import MissionSpec, run_mission
+from mrexplore.pipeline import make_strategy
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "maps"
 MAPS = (
@@ -49,7 +49,7 @@ def records(with_faults: bool = True) -> dict[str, dict[str, object]]:
         truth = load_map(m, MapConfig(resolution_m=0.1))
         for s in STRATEGIES:
             for name, cfg in _missions(with_faults).items():
-                r = run_mission(truth, make_strategy(s), SimConfig(robots=3), cfg, seed=1, progress=False)
+                r = run_mission(MissionSpec(truth, make_strategy(s), SimConfig(robots=3), cfg, seed=1), progress=False)
                 d = {k: v for k, v in r.measures.to_dict().items() if k not in TIMINGS}
                 out[f"{truth.name}|{s}|{name}"] = d
     return out

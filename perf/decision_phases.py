@@ -20,8 +20,8 @@ import numpy as np
 
 from mrexplore.config import RunConfig, read_config_file
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission
-from mrexplore.strategies import make_strategy
+from mrexplore.mission import Mission, MissionSpec
+from mrexplore.pipeline import make_strategy
 
 BANDS = (0.0, 0.15, 0.3, 0.5, 0.75, 0.95, 1.01)
 
@@ -29,12 +29,12 @@ BANDS = (0.0, 0.15, 0.3, 0.5, 0.75, 0.95, 1.01)
 def phases(map_path: str, robots: int, strategy: str, resolution_m: float, cfg: RunConfig, seed: int) -> dict:
     truth = load_map(map_path, replace(cfg.map, resolution_m=resolution_m))
     pipeline = make_strategy(strategy, cfg.global_planning, cfg.preprocess, cfg.local_planning, coscan_cfg=cfg.coscan)
-    m = Mission(truth, pipeline, replace(cfg.sim, robots=robots), cfg.mission, seed, progress=False)
+    m = Mission(MissionSpec(truth, pipeline, replace(cfg.sim, robots=robots), cfg.mission, seed), progress=False)
     coverage = []
     while m.advance():
         m.decide()
         coverage.append(m.sim.coverage)
-    ms, cov = np.array(m.plan_ms), np.array(coverage[: len(m.plan_ms)])
+    ms, cov = np.array(m.record.plan_ms), np.array(coverage[: len(m.record.plan_ms)])
     rows = []
     for lo, hi in zip(BANDS[:-1], BANDS[1:], strict=True):
         sel = (cov >= lo) & (cov < hi)

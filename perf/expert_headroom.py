@@ -26,11 +26,11 @@ import numpy as np
 from mrexplore.bench.report import paired_bootstrap
 from mrexplore.cli import run_script
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig, TrainConfig
-from mrexplore.global_planning.learned.expert import candidate_assignments, known_world_returns, lookahead_returns
 from mrexplore.global_planning.protocol import Assignment
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission
-from mrexplore.strategies import make_strategy
+from mrexplore.mission import Mission, MissionSpec
+from mrexplore.pipeline import make_strategy
+from mrexplore.training.expert import candidate_assignments, known_world_returns, lookahead_returns
 
 MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
 
@@ -41,7 +41,9 @@ def episode(args: tuple[str, int, int, bool, str]) -> int:
     cfg = TrainConfig()
     truth = load_map(path, MapConfig(resolution_m=cfg.resolution_m))
     pipeline = make_strategy("hier-heuristic")
-    m = Mission(truth, pipeline, SimConfig(robots=robots), MissionConfig(max_steps=2000), seed, progress=False)
+    m = Mission(
+        MissionSpec(truth, pipeline, SimConfig(robots=robots), MissionConfig(max_steps=2000), seed), progress=False
+    )
     rng = np.random.default_rng(seed)
     lookahead = known_world_returns if world == "known" else lookahead_returns
     while m.advance():

@@ -23,8 +23,8 @@ import numpy as np
 from mrexplore.cli import run_script
 from mrexplore.config import MapConfig, MissionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission
-from mrexplore.strategies import make_strategy
+from mrexplore.mission import Mission, MissionSpec
+from mrexplore.pipeline import make_strategy
 
 
 def main() -> None:
@@ -43,28 +43,30 @@ def main() -> None:
     print(f"{truth.name}: {truth.shape[0]} x {truth.shape[1]} = {truth.shape[0] * truth.shape[1]} cells")
     late = args.from_coverage is not None
     mission = Mission(
-        truth,
-        make_strategy(args.strategy),
-        SimConfig(robots=args.robots),
-        MissionConfig(max_steps=100_000 if late else args.steps),
-        seed=0,
+        MissionSpec(
+            truth,
+            make_strategy(args.strategy),
+            SimConfig(robots=args.robots),
+            MissionConfig(max_steps=100_000 if late else args.steps),
+            seed=0,
+        ),
         progress=False,
     )
     t0 = time.perf_counter()
     if late:
         while mission.advance():
             mission.decide()
-            if mission.curve[-1] >= args.from_coverage:
+            if mission.record.curve[-1] >= args.from_coverage:
                 break
-        print(f"coverage {mission.curve[-1]:.3f} at step {mission.steps} ({time.perf_counter() - t0:.0f} s)")
-    first, budget = len(mission.plan_ms), args.decisions if late else None
+        print(f"coverage {mission.record.curve[-1]:.3f} at step {mission.steps} ({time.perf_counter() - t0:.0f} s)")
+    first, budget = len(mission.record.plan_ms), args.decisions if late else None
     profile = cProfile.Profile()
     t0 = time.perf_counter()
     profile.enable()
-    while (budget is None or len(mission.plan_ms) - first < budget) and mission.advance():
+    while (budget is None or len(mission.record.plan_ms) - first < budget) and mission.advance():
         mission.decide()
     profile.disable()
-    ms = np.asarray(mission.plan_ms[first:])
+    ms = np.asarray(mission.record.plan_ms[first:])
     print(
         f"{len(ms)} decisions to step {mission.steps} in {time.perf_counter() - t0:.1f} s; centre decision "
         f"mean {ms.mean():.1f} ms, median {np.median(ms):.1f} ms, p95 {np.percentile(ms, 95):.1f} ms"

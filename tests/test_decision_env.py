@@ -8,12 +8,13 @@ from mrexplore.config import MapConfig, MissionConfig, SimConfig
 from mrexplore.decision_env import DecisionEnv
 from mrexplore.global_planning.classical import NearestPlanner
 from mrexplore.maps.loaders import load_map
-from mrexplore.strategies import make_strategy
+from mrexplore.mission import MissionSpec
+from mrexplore.pipeline import make_strategy
 
 
 def test_rewards_add_up_to_eq9_and_the_episode_terminates() -> None:
     truth = load_map("generated:1", MapConfig(resolution_m=0.2))
-    env = DecisionEnv(truth, make_strategy("utility"), SimConfig(robots=2))
+    env = DecisionEnv(MissionSpec(truth, make_strategy("utility"), SimConfig(robots=2)))
     problem, _ = env.reset(seed=3)
     total, steps, terminated, truncated = 0.0, 0, False, False
     known0 = env.mission.sim.known_cells if env.mission else 0
@@ -30,7 +31,7 @@ def test_rewards_add_up_to_eq9_and_the_episode_terminates() -> None:
 
 def test_budget_truncates() -> None:
     truth = load_map("generated:1", MapConfig(resolution_m=0.2))
-    env = DecisionEnv(truth, make_strategy("utility"), mission_cfg=MissionConfig(max_steps=7))
+    env = DecisionEnv(MissionSpec(truth, make_strategy("utility"), mission_cfg=MissionConfig(max_steps=7)))
     env.reset(seed=0)
     done = False
     while not done:

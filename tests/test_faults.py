@@ -9,12 +9,12 @@ from conftest import require_shared_maps, state_grid
 from mrexplore.config import FaultConfig, MapConfig, MissionConfig, PreprocessConfig, SensorConfig, SimConfig
 from mrexplore.global_planning.protocol import UNASSIGNED
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission, run_mission
+from mrexplore.mission import Mission, MissionSpec, run_mission
+from mrexplore.pipeline import make_strategy, strategy_names
 from mrexplore.preprocessing.reconstruction import CentreMap
 from mrexplore.preprocessing.sparse_map import sparse_frontier_map
 from mrexplore.preprocessing.transmission import TeamLink
 from mrexplore.sim.belief import Belief
-from mrexplore.strategies import make_strategy, strategy_names
 from mrexplore.types import CellState, MrExploreError
 
 REAL_MAPS = ("houseexpo/json/0a1b29dba355df2ab02630133187bfab.json", "dungeon/easy_img_15.png")
@@ -37,7 +37,9 @@ def small_map():
 
 def _run(truth, strategy: str, faults: FaultConfig, robots: int = 3, seed: int = 1):
     cfg = MissionConfig(max_steps=4000, faults=faults)
-    return run_mission(truth, make_strategy(strategy), SimConfig(robots=robots), cfg, seed=seed, progress=False)
+    return run_mission(
+        MissionSpec(truth, make_strategy(strategy), SimConfig(robots=robots), cfg, seed=seed), progress=False
+    )
 
 
 @pytest.mark.parametrize("strategy", STRATEGIES)
@@ -49,11 +51,13 @@ def test_one_robot_of_three_lost_mid_mission_the_others_finish(real_maps, strate
     seen_after: list[np.ndarray] = []
     where_after: list[list[int]] = []
     mission = Mission(
-        truth,
-        make_strategy(strategy),
-        SimConfig(robots=3),
-        MissionConfig(max_steps=4000, faults=FaultConfig(robot_failures=((1, fail_at),))),
-        seed=1,
+        MissionSpec(
+            truth,
+            make_strategy(strategy),
+            SimConfig(robots=3),
+            MissionConfig(max_steps=4000, faults=FaultConfig(robot_failures=((1, fail_at),))),
+            seed=1,
+        ),
         progress=False,
     )
     while mission.advance():
@@ -204,11 +208,13 @@ def test_delta_centre_equals_the_lossless_one_once_robots_resync(small_map) -> N
     """Run a mission with 30% loss, then one lossless round: the centre's grid built from deltas (and the
     resends the losses caused) equals a fresh centre's built from whole maps of the same beliefs."""
     mission = Mission(
-        small_map,
-        make_strategy("utility"),
-        SimConfig(robots=3),
-        MissionConfig(max_steps=150, faults=FaultConfig(message_loss=0.3)),
-        seed=2,
+        MissionSpec(
+            small_map,
+            make_strategy("utility"),
+            SimConfig(robots=3),
+            MissionConfig(max_steps=150, faults=FaultConfig(message_loss=0.3)),
+            seed=2,
+        ),
         progress=False,
     )
     while mission.advance():
@@ -265,7 +271,9 @@ def test_rounds_where_the_centre_hears_nobody_pose_nothing_and_the_mission_goes_
 
     faults = FaultConfig(message_loss=0.8, silence_rounds=1)
     cfg = MissionConfig(max_steps=3000, faults=faults)
-    mission = Mission(small_map, make_strategy("utility"), SimConfig(robots=1), cfg, seed=0, progress=False)
+    mission = Mission(
+        MissionSpec(small_map, make_strategy("utility"), SimConfig(robots=1), cfg, seed=0), progress=False
+    )
     idle = 0
     while mission.advance():
         if mission.pose() is None:
@@ -273,7 +281,7 @@ def test_rounds_where_the_centre_hears_nobody_pose_nothing_and_the_mission_goes_
             continue
         mission.commit()
     assert idle > 0 and mission.done_reason in FINISHED and mission.sim.coverage >= 0.99
-    env = DecisionEnv(small_map, make_strategy("utility"), SimConfig(robots=1), cfg)
+    env = DecisionEnv(MissionSpec(small_map, make_strategy("utility"), SimConfig(robots=1), cfg))
     problem, info = env.reset(seed=0)
     done = False
     while not done:

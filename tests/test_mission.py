@@ -15,11 +15,12 @@ from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, Pre
 from mrexplore.maps.floorplan import FloorplanSpec, generate_floorplan
 from mrexplore.maps.ground_truth import GridFrame, GroundTruthMap
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission, run_mission
+from mrexplore.mission import Mission, MissionSpec, run_mission
 from mrexplore.paths.far_field import NearFarField
+from mrexplore.pipeline import CandidateSet, DecisionInput, make_strategy
 from mrexplore.preprocessing.clustering import Clusters
+from mrexplore.preprocessing.denoise import denoised_frontier_cells
 from mrexplore.preprocessing.frontiers import Frontiers
-from mrexplore.strategies import CandidateSet, _denoised_un, make_strategy
 from mrexplore.types import MrExploreError
 
 TIMING_KEYS = {"wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb", "onboard_ms_median", "onboard_ms_p95"}
@@ -32,7 +33,7 @@ def small_map():
 
 @pytest.mark.parametrize("strategy", ["nearest", "utility", "hier", "coscan", "oracle"])
 def test_mission_explores_the_map(small_map, strategy: str) -> None:
-    m = run_mission(small_map, make_strategy(strategy), SimConfig(robots=2), seed=1).measures
+    m = run_mission(MissionSpec(small_map, make_strategy(strategy), SimConfig(robots=2), seed=1)).measures
     assert m.coverage >= 0.99
     assert m.done_reason in {"no_frontiers", "no_reachable_frontiers", "plan_done"}
     assert 0 < m.lower_bound_steps <= m.steps
@@ -42,14 +43,14 @@ def test_mission_explores_the_map(small_map, strategy: str) -> None:
 
 
 def test_same_seed_same_result_other_seed_other_result(small_map) -> None:
-    runs = [run_mission(small_map, make_strategy("utility"), seed=s).measures.to_dict() for s in (4, 4, 5)]
+    runs = [run_mission(MissionSpec(small_map, make_strategy("utility"), seed=s)).measures.to_dict() for s in (4, 4, 5)]
     strip = [{k: v for k, v in r.items() if k not in TIMING_KEYS} for r in runs]
     assert strip[0] == strip[1]
     assert strip[0] != strip[2]
 
 
 def test_budget_ends_as_max_steps_never_success(small_map) -> None:
-    res = run_mission(small_map, make_strategy("nearest"), mission_cfg=MissionConfig(max_steps=5), seed=0)
+    res = run_mission(MissionSpec(small_map, make_strategy("nearest"), mission_cfg=MissionConfig(max_steps=5), seed=0))
     assert res.measures.done_reason == "max_steps" and res.measures.steps == 5
     assert len(res.coverage_curve) == 6
 
@@ -61,7 +62,7 @@ def test_hier_routes_through_sub_clusters(small_map) -> None:
         if decision is not None:
             seen.append(max(len(r) for r in decision.routes))
 
-    run_mission(small_map, make_strategy("hier"), SimConfig(robots=2), seed=1, observer=observe)
+    run_mission(MissionSpec(small_map, make_strategy("hier"), SimConfig(robots=2), seed=1), observer=observe)
     assert max(seen) > 1  # some decision routed a robot through several targets
     assert make_strategy("hier", local=False).local is None
     assert make_strategy("hier", local=False).name == "hier-nolocal"
@@ -71,10 +72,12 @@ def test_goals_with_no_path_are_blacklisted_not_chosen_forever(small_map, monkey
     # Every path comes back empty, as it did on a large floor where a distance was only an estimate (and
     # where float32 distances beyond 2,048 cells read back no path): each goal is blacklisted when given,
     # so the candidates run out and the mission ends instead of idling the team to its budget.
-    import mrexplore.strategies as strategies
+    import mrexplore.pipeline.base as base
 
-    monkeypatch.setattr(strategies, "path_to", lambda *a: np.zeros((0, 2), np.int32))
-    m = Mission(small_map, make_strategy("utility"), SimConfig(robots=2), MissionConfig(max_steps=5000), seed=1)
+    monkeypatch.setattr(base, "path_to", lambda *a: np.zeros((0, 2), np.int32))
+    m = Mission(
+        MissionSpec(small_map, make_strategy("utility"), SimConfig(robots=2), MissionConfig(max_steps=5000), seed=1)
+    )
     m.run()
     assert m.done_reason == "no_frontiers" and m.steps < 5000
     assert m.pathless_goals >= 1 and m.blacklist.any()
@@ -83,7 +86,7 @@ def test_goals_with_no_path_are_blacklisted_not_chosen_forever(small_map, monkey
 
 def test_wrong_number_of_starts_refused(small_map) -> None:
     with pytest.raises(MrExploreError, match=r"starts must give one cell per robot \(3\), got 1"):
-        run_mission(small_map, make_strategy("nearest"), starts_rc=np.array([[5, 5]]))
+        run_mission(MissionSpec(small_map, make_strategy("nearest"), starts_rc=np.array([[5, 5]])))
 
 
 def test_one_decision_by_hand() -> None:
@@ -96,7 +99,7 @@ def test_one_decision_by_hand() -> None:
         #########
     """)
     pipeline = make_strategy("utility")
-    d = pipeline.decide(state, np.array([[2, 2], [2, 6]], np.int32), 0.05)
+    d = pipeline.decide(DecisionInput(state, np.array([[2, 2], [2, 6]], np.int32), 0.05))
     assert d.done_reason is None
     assert d.clusters.centers_rc.tolist() == [[2, 1], [2, 7]] and d.clusters.sizes.tolist() == [3, 3]
     assert d.goals_rc.tolist() == [[2, 1], [2, 7]]  # each robot takes the end nearer to it
@@ -116,7 +119,7 @@ def test_far_distances_on_a_large_map_decide_a_corridor_as_exact_ones_do(sector:
         far_above_cells=0, exact_radius_m=0.25, coarse_cell_m=0.1, portal_sector_blocks=sector, portal_spacing_blocks=2
     )
     exact, far = make_strategy("utility"), make_strategy("utility", far_cfg)
-    posed = far.pose(state, robots, 0.05)
+    posed = far.pose(DecisionInput(state, robots, 0.05))
     assert posed.problem is not None and posed.work is not None
     fields = posed.work.fields
     assert all(isinstance(f, NearFarField) for f in fields)
@@ -126,7 +129,7 @@ def test_far_distances_on_a_large_map_decide_a_corridor_as_exact_ones_do(sector:
     # row at each end of the way; in one sector, with no portal, through the robot's own seed blocks.
     want = {0: 9.0, 2: 9.0 + 2 * (np.sqrt(2.0) - 1.0), 24: 9.0 + 2 * (np.sqrt(2.0) - 1.0)}[sector]
     assert fields[1].value(2, 39) == pytest.approx(want)
-    d_exact, d_far = exact.decide(state, robots, 0.05), far.decide(state, robots, 0.05)
+    d_exact, d_far = exact.decide(DecisionInput(state, robots, 0.05)), far.decide(DecisionInput(state, robots, 0.05))
     assert d_far.goals_rc.tolist() == d_exact.goals_rc.tolist() == [[2, 1], [2, 39]]
     assert [p.tolist() for p in d_far.paths] == [p.tolist() for p in d_exact.paths]
     assert d_far.paths[1].tolist() == [[2, c] for c in range(30, 40)]
@@ -135,20 +138,22 @@ def test_far_distances_on_a_large_map_decide_a_corridor_as_exact_ones_do(sector:
 def test_routes_on_threads_give_the_mission_inline_routes_give(small_map, monkeypatch) -> None:
     # Large grids route their robots on the threads; forced on this small one, with two threads and the
     # router's memo shared between them, every record but the timings stays as it is inline.
-    import mrexplore.strategies as strategies
+    import mrexplore.pipeline.base as base
 
     monkeypatch.setenv("MREXPLORE_THREADS", "2")
-    plain, on_threads = strategies.map_threads, []
+    plain, on_threads = base.map_threads, []
 
     def spied(fn, items):
         on_threads.append(len(items))
         return plain(fn, items)
 
-    monkeypatch.setattr(strategies, "map_threads", spied)
+    monkeypatch.setattr(base, "map_threads", spied)
     runs, calls = [], []
     for cells in (10**12, 0):
-        monkeypatch.setattr(strategies, "_THREADED_ROUTES_CELLS", cells)
-        runs.append(run_mission(small_map, make_strategy("hier"), SimConfig(robots=4), seed=3).measures.to_dict())
+        monkeypatch.setattr(base, "_THREADED_ROUTES_CELLS", cells)
+        runs.append(
+            run_mission(MissionSpec(small_map, make_strategy("hier"), SimConfig(robots=4), seed=3)).measures.to_dict()
+        )
         calls.append(len(on_threads))
     assert calls[0] == 0 and calls[1] > 0  # inline first, then every decision's routes on the threads
     inline, threaded = ({k: v for k, v in r.items() if k not in TIMING_KEYS} for r in runs)
@@ -171,7 +176,11 @@ def test_baseline_bytes_counted_on_threads_equal_those_counted_inline(small_map,
     runs = []
     for threads in ("1", "2"):
         monkeypatch.setenv("MREXPLORE_THREADS", threads)
-        runs.append(run_mission(small_map, make_strategy("utility"), SimConfig(robots=3), seed=2).measures.to_dict())
+        runs.append(
+            run_mission(
+                MissionSpec(small_map, make_strategy("utility"), SimConfig(robots=3), seed=2)
+            ).measures.to_dict()
+        )
     one, two = ({k: v for k, v in r.items() if k not in TIMING_KEYS} for r in runs)
     assert max(batches) == 3  # all three robots' grids in one batch at some round
     assert one["bytes_grid_zlib"] > 0 and two == one
@@ -182,7 +191,9 @@ def test_a_mission_without_the_grid_baselines_is_the_same_mission(small_map) -> 
     # three grid fields is the same, and those read None (empty in a bench's CSV), not 0.
     cfg = MissionConfig()
     runs = [
-        run_mission(small_map, make_strategy(s), SimConfig(robots=3), replace(cfg, baseline_bytes=b), seed=1)
+        run_mission(
+            MissionSpec(small_map, make_strategy(s), SimConfig(robots=3), replace(cfg, baseline_bytes=b), seed=1)
+        )
         for s in ("utility", "coscan")
         for b in (True, False)
     ]
@@ -210,7 +221,7 @@ def test_commitment_keeps_a_robot_on_its_goal(commitment: float, goal: list[int]
     """)
     pipeline = make_strategy("nearest", GlobalPlanningConfig(commitment=commitment))
     current = [np.array([[2, 1]], np.int32)]
-    d = pipeline.decide(state, np.array([[2, 5]], np.int32), 0.05, current=current)
+    d = pipeline.decide(DecisionInput(state, np.array([[2, 5]], np.int32), 0.05, current=current))
     assert d.goals_rc.tolist() == [goal]
 
 
@@ -218,7 +229,7 @@ def _as_with_whole_searches(truth, pipeline, steps: int, seed: int) -> dict:
     """A mission's measures with the pipeline's stopped searches, having checked that they, and the coverage
     curve, are those of the same mission with whole searches (``stop_searches=False``), step for step."""
     runs = [
-        run_mission(truth, p, SimConfig(robots=3), MissionConfig(max_steps=steps), seed=seed)
+        run_mission(MissionSpec(truth, p, SimConfig(robots=3), MissionConfig(max_steps=steps), seed=seed))
         for p in (pipeline, replace(pipeline, stop_searches=False))
     ]
     a, b = ({k: v for k, v in r.measures.to_dict().items() if k not in TIMING_KEYS} for r in runs)
@@ -247,7 +258,7 @@ def test_nearest_poses_every_distance_for_another_planner() -> None:
     pipeline = make_strategy("nearest")
     robots = np.array([[2, 2]], np.int32)
     for own, right in ((False, 5.0), (True, np.inf)):
-        posed = pipeline.pose(state, robots, 0.05, own_planner=own)
+        posed = pipeline.pose(DecisionInput(state, robots, 0.05), own_planner=own)
         assert posed.problem is not None
         left = posed.problem.clusters.centers_rc[:, 1].tolist().index(1)
         assert posed.problem.dist_cells[0, left] == 1.0 and posed.problem.dist_cells[0, 1 - left] == right
@@ -286,7 +297,7 @@ def test_ncm_poses_its_window_for_itself_and_every_distance_for_another_planner(
     robots = np.array([[2, col]], np.int32)
     whole = {1: col - 1.0, 58: 58.0 - col}  # the middle row's nodes, straight along the corridor
     for own in (False, True):
-        posed = pipeline.pose(state, robots, 1.0, own_planner=own)
+        posed = pipeline.pose(DecisionInput(state, robots, 1.0), own_planner=own)
         assert posed.problem is not None
         centres = posed.problem.clusters.centers_rc.tolist()
         at = {c: posed.problem.dist_cells[0, centres.index([2, c])] for c in (1, 58)}
@@ -314,7 +325,7 @@ def test_frontier_specks_are_dropped_before_clustering(drop: bool, members: list
         #####?#?#
     """)
     cfg = PreprocessConfig(bandwidth_percentile=100.0, drop_specks=drop)
-    d = make_strategy("utility", preprocess_cfg=cfg).decide(state, np.array([[2, 4]], np.int32), 0.05)
+    d = make_strategy("utility", preprocess_cfg=cfg).decide(DecisionInput(state, np.array([[2, 4]], np.int32), 0.05))
     assert d.clusters.members_rc.tolist() == members and d.clusters.sizes.tolist() == [len(members)]
 
 
@@ -324,13 +335,13 @@ def test_no_frontier_ends_the_mission_by_decision() -> None:
         #...#
         #####
     """)
-    d = make_strategy("nearest").decide(state, np.array([[1, 1]], np.int32), 0.05)
+    d = make_strategy("nearest").decide(DecisionInput(state, np.array([[1, 1]], np.int32), 0.05))
     assert d.done_reason == "no_frontiers"
 
 
 def test_centre_plans_the_same_from_deltas_as_from_full_maps(small_map) -> None:
     runs = [
-        run_mission(small_map, make_strategy("hier"), mission_cfg=MissionConfig(transmission=mode), seed=2)
+        run_mission(MissionSpec(small_map, make_strategy("hier"), mission_cfg=MissionConfig(transmission=mode), seed=2))
         for mode in ("delta", "full")
     ]
     strip = [{k: v for k, v in r.measures.to_dict().items() if k not in TIMING_KEYS} for r in runs]
@@ -360,7 +371,7 @@ def test_vanished_goals_wait_min_replan_steps(small_map, k: int) -> None:
         idle[0] = any(sim.at_path_end(i) or sim.path_ahead_blocked(i) for i in range(sim.n_robots))
 
     cfg = MissionConfig(min_replan_steps=k, replan_every_steps=1000)
-    run_mission(small_map, make_strategy("nearest"), SimConfig(robots=2), cfg, seed=1, observer=observe)
+    run_mission(MissionSpec(small_map, make_strategy("nearest"), SimConfig(robots=2), cfg, seed=1), observer=observe)
     gaps = [(b[0] - a[0], b[1]) for a, b in zip(decisions, decisions[1:], strict=False)]
     assert all(gap >= k or idle_then for gap, idle_then in gaps)
     assert any(gap < 10 and not idle_then for gap, idle_then in gaps) == (k == 1)  # k=1 replans for vanished goals
@@ -381,5 +392,5 @@ def test_specks_dropped_sparsely_as_on_the_whole_grid(seed: int, min_size: int, 
     expected = un & ~blacklist if blacklist is not None else un.copy()
     labels, _ = ndimage.label(expected, structure=np.ones((3, 3)))
     expected &= np.bincount(labels.ravel())[labels] >= min_size
-    got = _denoised_un(Frontiers(un, np.zeros_like(un)), blacklist, min_size)
+    got = denoised_frontier_cells(Frontiers(un, np.zeros_like(un)), blacklist, min_size)
     assert got.tolist() == np.argwhere(expected).tolist()

@@ -12,10 +12,10 @@ from conftest import SHARED_MAPS, truth_map
 
 from mrexplore.config import MapConfig, MissionConfig, SensorConfig, SimConfig
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission
+from mrexplore.mission import Mission, MissionSpec
 from mrexplore.paths.astar import astar_path
 from mrexplore.paths.distance_field import distance_field
-from mrexplore.strategies import make_strategy, strategy_names
+from mrexplore.pipeline import make_strategy, strategy_names
 from mrexplore.types import CellState
 
 TEAMS = (1, 2, 3, 5, 8)
@@ -76,7 +76,7 @@ def test_no_stretch_without_new_area_beyond_travel_and_watchdog(maps, map_spec, 
     truth = maps[map_spec]
     sim_cfg = SimConfig(robots=robots, sensor=SensorConfig(range_m=range_m))
     cfg = MissionConfig(max_steps=6000)
-    mission = Mission(truth, make_strategy(strategy), sim_cfg, cfg, seed=robots, progress=False)
+    mission = Mission(MissionSpec(truth, make_strategy(strategy), sim_cfg, cfg, seed=robots), progress=False)
     result = mission.run()
     m = result.measures
     assert m.done_reason != "max_steps", f"{strategy} never ended ({m.steps} steps, coverage {m.coverage:.3f})"
@@ -117,7 +117,7 @@ def test_a_robot_returning_to_goals_it_gave_up_commits_to_its_goal() -> None:
     strategy.decide = flipping  # type: ignore[method-assign]
     cfg = MissionConfig(max_steps=2000, replan_every_steps=5, min_replan_steps=5)
     sim = SimConfig(robots=1, sensor=SensorConfig(range_m=1.0))
-    mission = Mission(corridor, strategy, sim, cfg, seed=0, starts_rc=np.array([[1, 22]]), progress=False)
+    mission = Mission(MissionSpec(corridor, strategy, sim, cfg, seed=0, starts_rc=np.array([[1, 22]])), progress=False)
     result = mission.run()
     assert mission.oscillations >= 1
     assert result.measures.done_reason == "no_frontiers" and result.measures.coverage > 0.95
@@ -125,7 +125,9 @@ def test_a_robot_returning_to_goals_it_gave_up_commits_to_its_goal() -> None:
     assert calls[0] > 2 * cfg.oscillation_returns
     # Without the breaker the same planner flips the robot until the budget runs out.
     endless = Mission(
-        corridor, strategy, sim, replace(cfg, oscillation_returns=10**6), seed=0, starts_rc=np.array([[1, 22]])
+        MissionSpec(
+            corridor, strategy, sim, replace(cfg, oscillation_returns=10**6), seed=0, starts_rc=np.array([[1, 22]])
+        )
     )
     assert endless.run().measures.done_reason == "max_steps"
 
@@ -143,7 +145,7 @@ def test_the_watchdog_drops_a_goal_that_brings_nothing() -> None:
         resolution_m=0.2,
     )
     cfg = MissionConfig(max_steps=400, stall_steps=30)
-    mission = Mission(room, make_strategy("nearest"), SimConfig(robots=1), cfg, seed=0, progress=False)
+    mission = Mission(MissionSpec(room, make_strategy("nearest"), SimConfig(robots=1), cfg, seed=0), progress=False)
     assert mission.advance()
     mission.decide()
     mission.goals[0] = np.array([1, 10], np.int32)  # a goal it keeps but never drives to

@@ -30,10 +30,10 @@ from mrexplore.config import (
 )
 from mrexplore.maps.loaders import DEFAULT_MAP, load_map
 from mrexplore.maps.map_saver import save_ros_map
-from mrexplore.mission import run_mission
+from mrexplore.mission import MissionSpec, run_mission
+from mrexplore.pipeline import make_strategy, strategy_names
 from mrexplore.render import GifRecorder, save_png
 from mrexplore.sim.starts import draw_starts, starts_from_xy
-from mrexplore.strategies import make_strategy, strategy_names
 from mrexplore.types import MrExploreError
 
 __all__ = ["main", "build_parser", "strict_json"]
@@ -371,7 +371,7 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
 
 
 def _train(args: argparse.Namespace) -> str:
-    from mrexplore.global_planning.learned.trainer import train
+    from mrexplore.training.trainer import train
 
     run = _run_config(args)
     if args.strategy is not None:
@@ -438,12 +438,7 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
             raise MrExploreError(f"--start must be given once or once per robot ({sim_cfg.robots}), got {len(given)}")
     recorder = GifRecorder() if (args.gif or args.png) else None
     result = run_mission(
-        truth,
-        strategy,
-        sim_cfg,
-        mission_cfg,
-        seed=args.seed,
-        starts_rc=starts,
+        MissionSpec(truth, strategy, sim_cfg, mission_cfg, seed=args.seed, starts_rc=starts),
         observer=recorder,
         progress=args.progress,
     )

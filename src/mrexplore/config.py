@@ -604,7 +604,7 @@ class TrainConfig(_Checked):
     to the end, the largest maps weighing most) or ``relative`` (every episode weighing the same: the
     geometric mean over episodes of its steps to the end plus to 99% coverage, over those of the
     generation's current weights in the search and of the heuristic in validation; see
-    :func:`~mrexplore.global_planning.learned.search.relative_score`)."""
+    :func:`~mrexplore.training.search.relative_score`)."""
     # -- policy search on the linear edge path (cross-entropy method)
     search_generations: int = 6
     """Generations of the cross-entropy search over the residual's linear edge weights (one per edge
@@ -639,7 +639,7 @@ class TrainConfig(_Checked):
     """Where the expert runs its candidates forward: ``truth`` (the simulator's map, scored by eq. 9's
     return over ``horizon_steps``) or ``known`` (the world the team has observed, every unseen cell a
     wall, scored by minus the steps until no frontier is left; labels a student could learn from what it
-    sees: :func:`~mrexplore.global_planning.learned.expert.known_world_returns`)."""
+    sees: :func:`~mrexplore.training.expert.known_world_returns`)."""
     noisy_candidates: int = 4
     """Noisy utility assignments among the expert's candidates, >= 0."""
     noise_m: float = 4.0

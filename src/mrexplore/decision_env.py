@@ -10,13 +10,11 @@ Gymnasium space describes them; the trainer drives the same Mission through pose
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
-from mrexplore.config import MissionConfig, SimConfig
 from mrexplore.global_planning.protocol import Assignment, AssignmentProblem
-from mrexplore.maps.ground_truth import GroundTruthMap
-from mrexplore.mission import Mission
-from mrexplore.strategies import ExplorationPipeline
+from mrexplore.mission import Mission, MissionSpec
 from mrexplore.types import MrExploreError
 
 __all__ = ["DecisionEnv"]
@@ -29,8 +27,9 @@ class DecisionEnv:
     --------
     >>> from mrexplore.config import MapConfig
     >>> from mrexplore.maps.loaders import load_map
-    >>> from mrexplore.strategies import make_strategy
-    >>> env = DecisionEnv(load_map("generated:0", MapConfig(resolution_m=0.2)), make_strategy("utility"))
+    >>> from mrexplore.pipeline import make_strategy
+    >>> from mrexplore.mission import MissionSpec
+    >>> env = DecisionEnv(MissionSpec(load_map("generated:0", MapConfig(resolution_m=0.2)), make_strategy("utility")))
     >>> problem, info = env.reset(seed=0)
     >>> total, done = 0.0, False
     >>> while not done:
@@ -41,26 +40,20 @@ class DecisionEnv:
     (True, True)
     """
 
-    def __init__(
-        self,
-        truth: GroundTruthMap,
-        strategy: ExplorationPipeline,
-        sim_cfg: SimConfig | None = None,
-        mission_cfg: MissionConfig | None = None,
-    ) -> None:
-        self.truth, self.strategy = truth, strategy
-        self.sim_cfg, self.mission_cfg = sim_cfg or SimConfig(), mission_cfg or MissionConfig()
+    def __init__(self, spec: MissionSpec) -> None:
+        """``spec``: the missions' map, strategy and settings; :meth:`reset` sets the seed and the starts."""
+        self.spec = spec
         self.mission: Mission | None = None
         self._problem: AssignmentProblem | None = None
 
     def reset(
         self, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[AssignmentProblem | None, dict[str, Any]]:
-        """Start a mission (starts from ``seed`` unless ``options["starts_rc"]``); run to its first decision."""
-        starts = (options or {}).get("starts_rc")
-        self.mission = Mission(
-            self.truth, self.strategy, self.sim_cfg, self.mission_cfg, seed or 0, starts, progress=False
-        )
+        """Start a mission (``seed``: the spec's where None; starts from the seed unless
+        ``options["starts_rc"]``); run to its first decision."""
+        starts = (options or {}).get("starts_rc", self.spec.starts_rc)
+        spec = replace(self.spec, seed=self.spec.seed if seed is None else seed, starts_rc=starts)
+        self.mission = Mission(spec, progress=False)
         self._to_next_decision()  # nothing happens before the first decision (step 0)
         return self._problem, self._info()
 

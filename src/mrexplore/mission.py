@@ -26,27 +26,37 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
-from mrexplore.config import MissionConfig, SimConfig
+from mrexplore.config import FaultConfig, MissionConfig, SimConfig
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.memory import peak_mb, reset_peak
 from mrexplore.paths.astar import astar_path
 from mrexplore.paths.distance_field import descend_path, distance_fields, distances_at
+from mrexplore.pipeline import NO_GOAL, NO_ROUTE, Decision, DecisionInput, ExplorationPipeline, PosedDecision
 from mrexplore.preprocessing.frontiers import close_unknown_holes, detect_frontiers
 from mrexplore.preprocessing.transmission import LinkStatus, TeamLink
 from mrexplore.sim.belief import classify
 from mrexplore.sim.measures import EpisodeMeasures, lower_bound_steps
 from mrexplore.sim.starts import draw_starts
 from mrexplore.sim.world import ExplorationSim, StepResult
-from mrexplore.strategies import NO_GOAL, Decision, ExplorationPipeline, PosedDecision
 from mrexplore.types import CellState, MrExploreError
 
-__all__ = ["Mission", "MissionResult", "MissionSnapshot", "run_mission", "Observer"]
+__all__ = [
+    "Mission",
+    "MissionSpec",
+    "MissionResult",
+    "MissionSnapshot",
+    "FaultSchedule",
+    "MeasuresRecorder",
+    "run_mission",
+    "Observer",
+]
 
 Observer = Callable[[ExplorationSim, Decision | None, NDArray[np.int32], LinkStatus], None]
 """Called after the first scan and after every step with the sim, the latest decision, the goals and
@@ -64,6 +74,90 @@ class MissionResult:
     final_state: NDArray[np.uint8] = field(repr=False)
     """``(H, W) uint8`` the centre's grid at the last decision."""
     sim: ExplorationSim = field(repr=False)
+
+
+@dataclass(frozen=True)
+class MissionSpec:
+    """What one mission is made of: the map, the strategy, the settings, the seed and, where given, the
+    starts. :class:`Mission`, :func:`run_mission` and :class:`~mrexplore.decision_env.DecisionEnv` are
+    built from it."""
+
+    truth: GroundTruthMap
+    strategy: ExplorationPipeline
+    sim_cfg: SimConfig = field(default_factory=SimConfig)
+    mission_cfg: MissionConfig = field(default_factory=MissionConfig)
+    seed: int = 0
+    """Seeds the starts, the simulator and the planners (one generator); lost messages draw from a second."""
+    starts_rc: NDArray[np.integer] | None = None
+    """``(n_robots, 2) int`` start cells; drawn close together from ``seed`` when None."""
+
+
+class FaultSchedule:
+    """When the mission's scheduled faults strike (:class:`~mrexplore.config.FaultConfig`): robots that fail
+    for good at a step, and centre restarts. Lost messages and the radio range act in the link and the
+    replanning loop."""
+
+    def __init__(self, faults: FaultConfig, n_robots: int) -> None:
+        for robot, _ in faults.robot_failures:
+            if robot >= n_robots:
+                raise MrExploreError(
+                    f"robot failure names robot {robot}, but the team has robots 0..{n_robots - 1}; "
+                    "pass an id of the team"
+                )
+        self._restarts = sorted(faults.centre_restarts)
+        self._failures = sorted((step, robot) for robot, step in faults.robot_failures)
+
+    def failures_due(self, step: int) -> list[int]:
+        """The robots that fail by ``step`` and have not failed yet, in the order they fail."""
+        due = []
+        while self._failures and self._failures[0][0] <= step:
+            due.append(self._failures.pop(0)[1])
+        return due
+
+    def restarts_due(self, step: int) -> int:
+        """How many centre restarts fall due by ``step`` (each counted once)."""
+        n = 0
+        while self._restarts and self._restarts[0] <= step:
+            self._restarts.pop(0)
+            n += 1
+        return n
+
+
+@dataclass
+class MeasuresRecorder:
+    """What a mission records as it goes, for :class:`~mrexplore.sim.measures.EpisodeMeasures`."""
+
+    curve: list[float]
+    """Team coverage after the first scan and after every step."""
+    plan_ms: list[float] = field(default_factory=list)
+    """The centre's time at each decision, ms."""
+    onboard_ms: list[float] = field(default_factory=list)
+    """Each robot's on-board work in each round it sent a map, ms (see :class:`TeamLink`)."""
+
+    def measures(
+        self,
+        truth: GroundTruthMap,
+        sim: ExplorationSim,
+        sim_cfg: SimConfig,
+        starts_rc: NDArray[np.int32],
+        wall_s: float,
+        done_reason: str,
+        transmission: dict[str, Any],
+    ) -> EpisodeMeasures:
+        """The episode's measures so far (``transmission``: the link's byte and IoU fields)."""
+        return EpisodeMeasures.from_run(
+            np.asarray(self.curve),
+            sim.robot_coverage,
+            sim.path_len_m,
+            self.plan_ms,
+            wall_s,
+            done_reason,
+            transmission,
+            lower_bound_steps(~truth.occupied, sim.explorable, starts_rc, truth.resolution_m, sim_cfg),
+            int((~sim.alive).sum()),
+            peak_mb(),
+            self.onboard_ms,
+        )
 
 
 def _goal_still_frontier(team_observed: np.ndarray, goal: NDArray[np.int32]) -> bool:
@@ -84,7 +178,7 @@ class MissionSnapshot:
     state: dict[str, object] = field(repr=False)
 
 
-_NOT_COPIED = ("strategy", "observer", "_bar", "truth")
+_NOT_COPIED = ("spec", "strategy", "observer", "_bar", "truth")
 """Shared, read-only during a mission (the ground truth) or owned by the caller: never snapshotted."""
 
 
@@ -101,45 +195,33 @@ class Mission:
     --------
     >>> from mrexplore.config import MapConfig
     >>> from mrexplore.maps.loaders import load_map
-    >>> from mrexplore.strategies import make_strategy
+    >>> from mrexplore.pipeline import make_strategy
     >>> truth = load_map("generated:0", MapConfig(resolution_m=0.2))
-    >>> m = Mission(truth, make_strategy("utility"), seed=0, progress=False)
+    >>> m = Mission(MissionSpec(truth, make_strategy("utility"), seed=0), progress=False)
     >>> while m.advance():
     ...     decision = m.decide()
     >>> m.done_reason in ("no_frontiers", "no_reachable_frontiers", "max_steps")
     True
     """
 
-    def __init__(
-        self,
-        truth: GroundTruthMap,
-        strategy: ExplorationPipeline,
-        sim_cfg: SimConfig | None = None,
-        mission_cfg: MissionConfig | None = None,
-        seed: int = 0,
-        starts_rc: NDArray[np.integer] | None = None,
-        observer: Observer | None = None,
-        progress: bool | None = None,
-    ) -> None:
+    def __init__(self, spec: MissionSpec, observer: Observer | None = None, progress: bool | None = None) -> None:
+        """``progress``: show a coverage bar; default: only when stderr is a terminal."""
         reset_peak()  # the episode's peak memory, from here (the map is already loaded)
-        self.sim_cfg = sim_cfg = sim_cfg or SimConfig()
-        self.mission_cfg = mission_cfg = mission_cfg or MissionConfig()
-        self.truth = truth
-        self.strategy = strategy
+        self.spec = spec
+        self.sim_cfg = sim_cfg = spec.sim_cfg
+        self.mission_cfg = mission_cfg = spec.mission_cfg
+        self.truth = truth = spec.truth
+        self.strategy = strategy = spec.strategy
         self.observer = observer
-        self.rng = rng = np.random.default_rng(seed)
+        self.rng = rng = np.random.default_rng(spec.seed)
+        starts_rc = spec.starts_rc
         if starts_rc is None:
             starts_rc = draw_starts(truth, sim_cfg.robots, sim_cfg.start_spread_m, rng)
         starts: NDArray[np.int32] = np.asarray(starts_rc, dtype=np.int32)
         if len(starts) != sim_cfg.robots:
             raise MrExploreError(f"starts must give one cell per robot ({sim_cfg.robots}), got {len(starts)}")
         faults = mission_cfg.faults
-        for robot, _ in faults.robot_failures:
-            if robot >= sim_cfg.robots:
-                raise MrExploreError(
-                    f"robot failure names robot {robot}, but the team has robots 0..{sim_cfg.robots - 1}; "
-                    "pass an id of the team"
-                )
+        self.faults = FaultSchedule(faults, sim_cfg.robots)
         self.starts_rc = starts
         self._t0 = time.perf_counter()
         strategy.prepare(truth, starts, sim_cfg)
@@ -147,10 +229,7 @@ class Mission:
         n = sim.n_robots
         self.goals = np.tile(NO_GOAL, (n, 1))
         self.blacklist = np.zeros(truth.shape, dtype=bool)
-        self.curve = [sim.coverage]
-        self.plan_ms: list[float] = []
-        self.onboard_ms: list[float] = []
-        """Each robot's on-board work in each round it sent a map, ms (see :class:`TeamLink`)."""
+        self.record = MeasuresRecorder([sim.coverage])
         self.last_decision_step = -mission_cfg.replan_every_steps
         self.decision: Decision | None = None
         # Every strategy plans on the grid the centre rebuilds from the robots' sparse frontier maps (IV-A).
@@ -162,12 +241,10 @@ class Mission:
             sim_cfg.sensor,
             mission_cfg.transmission,  # type: ignore[arg-type]
             faults.message_loss,
-            np.random.default_rng([seed, _LINK_STREAM]),
+            np.random.default_rng([spec.seed, _LINK_STREAM]),
             faults.silence_rounds,
             mission_cfg.baseline_bytes,
         )
-        self._restarts = sorted(faults.centre_restarts)
-        self._failures = sorted((step, robot) for robot, step in faults.robot_failures)
         self._relay_rc = starts[0].copy()
         self._range_cells = None if faults.comm_range_m is None else faults.comm_range_m / truth.resolution_m
         self._active = np.arange(n)
@@ -192,7 +269,7 @@ class Mission:
         show = sys.stderr.isatty() if progress is None else progress
         self._bar = tqdm(total=100, unit="%", desc=f"{strategy.name} {truth.name}", disable=not show, leave=False)
         self.blocked = np.zeros(n, dtype=bool)
-        self.routes = [_NO_ROUTE] * n  # targets after the current goal
+        self.routes = [NO_ROUTE] * n  # targets after the current goal
         self.passable = self.state == CellState.FREE
         self.reward_since_decision = 0.0
         """Paper eq. 9 summed over the simulation steps since the last decision: R_time per step plus
@@ -294,8 +371,8 @@ class Mission:
         neighbourhood stops being a candidate and the robot waits for the next decision."""
         self._blacklist_around(self.goals[i])
         self.goals[i] = NO_GOAL
-        self.routes[i] = _NO_ROUTE
-        self.sim.set_path(i, _NO_ROUTE)
+        self.routes[i] = NO_ROUTE
+        self.sim.set_path(i, NO_ROUTE)
         self._release(i)
         self.stalls += 1
 
@@ -361,20 +438,20 @@ class Mission:
             if near.any():
                 path = path[: int(np.argmax(near)) + 1]  # back in range is enough
         self.goals[i] = path[-1] if len(path) else NO_GOAL
-        self.routes[i] = _NO_ROUTE
+        self.routes[i] = NO_ROUTE
         sim.set_path(i, path)
         self._set_due(i, path)
 
     def step(self) -> StepResult:
         """One simulation step (no replanning check): fail robots due to fail, drive, scan, record."""
-        while self._failures and self._failures[0][0] <= self.sim.steps:
-            self.sim.fail(self._failures.pop(0)[1])
+        for robot in self.faults.failures_due(self.sim.steps):
+            self.sim.fail(robot)
         result = self.sim.step()
         self.blocked = result.blocked
         gained = self.sim.robot_known_cells > self._known_before
         self._last_gain[gained] = self.sim.steps
         self._known_before = self.sim.robot_known_cells.copy()
-        self.curve.append(self.sim.coverage)
+        self.record.curve.append(self.sim.coverage)
         r = self.sim_cfg.reward
         new_m2 = result.new_known_cells * self.truth.resolution_m**2
         self.reward_since_decision += r.time_reward + r.area_weight * new_m2
@@ -407,25 +484,23 @@ class Mission:
             if goals[i, 0] >= 0
             and not sim.at_path_end(i)
             and (not frontier_goals or _goal_still_frontier(sim.team_observed, goals[i]))
-            else (_NO_ROUTE if frontier_goals else self.routes[i])
+            else (NO_ROUTE if frontier_goals else self.routes[i])
             for i in range(sim.n_robots)
         ]
 
-    def _round(self) -> tuple[float, tuple[object, ...]]:
-        """The centre's round (robots send, the centre rebuilds): the start time and the arguments every
-        strategy decides on (grid, cells of the robots it assigns to, resolution, blacklist, their current
-        routes, generator, the grid's frontiers as the centre keeps them)."""
+    def _round(self) -> tuple[float, DecisionInput]:
+        """The centre's round (robots send, the centre rebuilds): the start time and what every strategy
+        decides on."""
         t = time.perf_counter()
         sim, link = self.sim, self.link
-        while self._restarts and self._restarts[0] <= sim.steps:
-            self._restarts.pop(0)
+        for _ in range(self.faults.restarts_due(sim.steps)):
             link.restart_centre()
             self.blacklist = np.zeros(self.truth.shape, dtype=bool)  # the centre's memory too
         self.state = link.exchange(sim.beliefs, sim.positions_rc, sim.alive & self._in_range())
-        self.onboard_ms.extend(link.robot_ms_each)
+        self.record.onboard_ms.extend(link.robot_ms_each)
         self._active = np.flatnonzero(link.status.assignable)
         current = self._current()
-        return t, (
+        return t, DecisionInput(
             self.state,
             link.status.positions_rc[self._active],
             self.truth.resolution_m,
@@ -443,13 +518,13 @@ class Mission:
     def decide(self) -> Decision | None:
         """Take the pending decision with the strategy's own planner and apply it; None where the centre
         heard no robot in time (faults): no decision, the robots carry on with what they have."""
-        t, args = self._round()
+        t, inp = self._round()
         if len(self._active) == 0:
-            self.plan_ms.append(self._centre_ms(t))
+            self.record.plan_ms.append(self._centre_ms(t))
             self._idle_round()
             return None
-        decision = self._expand(self.strategy.decide(*args))  # type: ignore[arg-type]
-        self.plan_ms.append(self._centre_ms(t))
+        decision = self._expand(self.strategy.decide(inp))
+        self.record.plan_ms.append(self._centre_ms(t))
         self._apply(decision)
         return decision
 
@@ -457,16 +532,16 @@ class Mission:
         """First half of a decision: the centre's round and layer 1. Returns the problem a global planner
         answers with :meth:`commit`, or None when the mission ended here (no frontier left or reachable,
         :attr:`done`) or, under faults, when the centre heard no robot in time (not done: advance on)."""
-        t, args = self._round()
+        t, inp = self._round()
         if len(self._active) == 0:
-            self.plan_ms.append(self._centre_ms(t))
+            self.record.plan_ms.append(self._centre_ms(t))
             self._idle_round()
             return None
-        posed = self.strategy.pose(*args)  # type: ignore[arg-type]
+        posed = self.strategy.pose(inp)
         ms = self._centre_ms(t)
-        if posed.problem is None:
-            self.plan_ms.append(ms)
-            self._apply(self._expand(posed.final))  # type: ignore[arg-type]
+        if posed.final is not None:
+            self.record.plan_ms.append(ms)
+            self._apply(self._expand(posed.final))
             return None
         self._posed = (posed, ms)
         return posed.problem
@@ -479,7 +554,7 @@ class Mission:
         self._posed = None
         t = time.perf_counter()
         decision = self._expand(self.strategy.finish(posed, assignment or self.strategy.assign(posed)))
-        self.plan_ms.append(ms + (time.perf_counter() - t) * 1e3)
+        self.record.plan_ms.append(ms + (time.perf_counter() - t) * 1e3)
         self._apply(decision)
         return decision
 
@@ -493,7 +568,7 @@ class Mission:
         goals[active] = decision.goals_rc
         cluster_of_robot = np.full(n, UNASSIGNED, dtype=np.int64)
         cluster_of_robot[active] = decision.assignment.cluster_of_robot
-        routes, paths = [_NO_ROUTE] * n, [_NO_ROUTE] * n
+        routes, paths = [NO_ROUTE] * n, [NO_ROUTE] * n
         for j, i in enumerate(active):
             routes[i], paths[i] = decision.routes[j], decision.paths[j]
         return replace(
@@ -556,23 +631,14 @@ class Mission:
         """The measures of the mission so far (closes the progress bar)."""
         self._bar.close()
         truth, sim = self.truth, self.sim
-        measures = EpisodeMeasures.from_run(
-            np.asarray(self.curve),
-            sim.robot_coverage,
-            sim.path_len_m,
-            self.plan_ms,
-            time.perf_counter() - self._t0,
-            self.done_reason or "max_steps",
-            self.link.totals.as_measures(),
-            lower_bound_steps(~truth.occupied, sim.explorable, self.starts_rc, truth.resolution_m, self.sim_cfg),
-            int((~sim.alive).sum()),
-            peak_mb(),
-            self.onboard_ms,
+        wall_s = time.perf_counter() - self._t0
+        transmission = self.link.totals.as_measures()
+        measures = self.record.measures(
+            truth, sim, self.sim_cfg, self.starts_rc, wall_s, self.done_reason or "max_steps", transmission
         )
-        return MissionResult(measures, np.asarray(self.curve), self.starts_rc.copy(), self.state, sim)
+        return MissionResult(measures, np.asarray(self.record.curve), self.starts_rc.copy(), self.state, sim)
 
 
-_NO_ROUTE = np.zeros((0, 2), dtype=np.int32)
 _ABANDONED_KEPT = 4
 """Goals given up that a robot remembers for oscillation breaking."""
 _LINK_STREAM = 0x4C494E4B
@@ -594,23 +660,7 @@ def _cell_mask(shape: tuple[int, int], rc: NDArray[np.integer]) -> NDArray[np.bo
     return mask
 
 
-def run_mission(
-    truth: GroundTruthMap,
-    strategy: ExplorationPipeline,
-    sim_cfg: SimConfig | None = None,
-    mission_cfg: MissionConfig | None = None,
-    seed: int = 0,
-    starts_rc: NDArray[np.integer] | None = None,
-    observer: Observer | None = None,
-    progress: bool | None = None,
-) -> MissionResult:
-    """Explore ``truth`` with ``strategy`` until done or out of budget (a :class:`Mission` run whole).
-
-    Parameters
-    ----------
-    starts_rc:
-        ``(n_robots, 2) int`` start cells; drawn close together from ``seed`` when None.
-    progress:
-        Show a coverage bar; default: only when stderr is a terminal.
-    """
-    return Mission(truth, strategy, sim_cfg, mission_cfg, seed, starts_rc, observer, progress).run()
+def run_mission(spec: MissionSpec, observer: Observer | None = None, progress: bool | None = None) -> MissionResult:
+    """Explore ``spec.truth`` with ``spec.strategy`` until done or out of budget (a :class:`Mission` run
+    whole); ``progress``: show a coverage bar (default: only when stderr is a terminal)."""
+    return Mission(spec, observer, progress).run()

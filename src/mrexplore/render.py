@@ -9,11 +9,11 @@ import numpy as np
 from numpy.typing import NDArray
 from PIL import Image, ImageDraw
 
+from mrexplore.pipeline import Decision
 from mrexplore.preprocessing.clustering import Clusters
 from mrexplore.preprocessing.transmission import LinkStatus
 from mrexplore.sim.belief import merge_beliefs
 from mrexplore.sim.world import ExplorationSim
-from mrexplore.strategies import Decision
 from mrexplore.types import CellState, MrExploreError, StateGrid
 
 __all__ = ["render_frame", "GifRecorder", "save_png"]

@@ -18,7 +18,7 @@ from mrexplore.global_planning.coscan import (
     tour_length,
     two_opt_tour,
 )
-from mrexplore.strategies import make_strategy
+from mrexplore.pipeline import DecisionInput, make_strategy
 
 
 def line(xs: list[float], robots: list[float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -189,7 +189,7 @@ def test_coscan_decision_by_hand() -> None:
         ###########
     """)
     pipeline = make_strategy("coscan")
-    d = pipeline.decide(state, np.array([[2, 3]], np.int32), 0.2)
+    d = pipeline.decide(DecisionInput(state, np.array([[2, 3]], np.int32), 0.2))
     assert d.done_reason is None
     assert d.clusters.members_rc.tolist() == [[1, 1], [1, 9]] and d.clusters.labels.tolist() == [0, 0]
     assert d.routes[0].tolist() == [[1, 1], [1, 9]] and d.goals_rc.tolist() == [[1, 1]]
@@ -198,7 +198,7 @@ def test_coscan_decision_by_hand() -> None:
 def test_coscan_and_the_oracle_plug_in_through_the_candidate_seam() -> None:
     """Strategies that choose their own candidates supply them (and their routing) through the pipeline's
     seam; none overrides the shared decision (STYLE rule 17)."""
-    from mrexplore.strategies import CoScanPipeline, ExplorationPipeline, OraclePipeline
+    from mrexplore.pipeline import CoScanPipeline, ExplorationPipeline, OraclePipeline
 
     for cls in (CoScanPipeline, OraclePipeline):
         assert "decide" not in cls.__dict__ and "pose" not in cls.__dict__ and "finish" not in cls.__dict__
@@ -212,8 +212,8 @@ def test_a_new_strategy_supplies_candidates_without_touching_the_decision() -> N
     from conftest import state_grid
 
     from mrexplore.global_planning.classical import GeodesicPlanner
+    from mrexplore.pipeline import CandidateSet, ExplorationPipeline
     from mrexplore.preprocessing.clustering import Clusters
-    from mrexplore.strategies import CandidateSet, ExplorationPipeline
 
     class TwoCells(ExplorationPipeline):
         def candidates(self, q):
@@ -228,7 +228,7 @@ def test_a_new_strategy_supplies_candidates_without_touching_the_decision() -> N
         #########
         """
     )
-    d = TwoCells("two", GeodesicPlanner()).decide(grid, np.array([[2, 6], [2, 2]], np.int32), 0.1)
+    d = TwoCells("two", GeodesicPlanner()).decide(DecisionInput(grid, np.array([[2, 6], [2, 2]], np.int32), 0.1))
     assert d.done_reason is None
     assert d.goals_rc.tolist() == [[1, 7], [1, 1]]  # each robot to the nearer cell
     assert d.paths[0][0].tolist() == [2, 6] and d.paths[0][-1].tolist() == [1, 7]
@@ -240,7 +240,7 @@ def test_coscan_robot_fields_stop_once_they_reach_the_tasks() -> None:
     # fields, which CoScan-2D searched before, read 23 there.
     state = state_grid("#" * 30 + "\n" + ("?" + "." * 28 + "#\n") * 2 + "#" * 30)
     robots = np.array([[1, 5]], np.int32)
-    posed = make_strategy("coscan").pose(state, robots, 0.2)
+    posed = make_strategy("coscan").pose(DecisionInput(state, robots, 0.2))
     assert posed.work is not None and posed.work.candidates is not None
     assert posed.work.candidates.context.tasks_rc.tolist() == [[1, 1]]
     field = posed.work.fields[0]
@@ -260,9 +260,9 @@ def test_near_far_coscan_decides_a_long_corridor_as_the_exact_one_does() -> None
     robots = np.array([[2, 8]], np.int32)
     far_cfg = GlobalPlanningConfig(far_above_cells=0, exact_radius_m=1.0, coarse_cell_m=0.4)
     exact, far = make_strategy("coscan"), make_strategy("coscan", far_cfg)
-    posed = far.pose(state, robots, 0.2)
+    posed = far.pose(DecisionInput(state, robots, 0.2))
     assert posed.work is not None and all(isinstance(f, NearFarField) for f in posed.work.fields)
-    d_exact, d_far = exact.decide(state, robots, 0.2), far.decide(state, robots, 0.2)
+    d_exact, d_far = exact.decide(DecisionInput(state, robots, 0.2)), far.decide(DecisionInput(state, robots, 0.2))
     assert d_far.clusters.members_rc.tolist() == d_exact.clusters.members_rc.tolist() == [[1, 1], [1, 39]]
     assert d_far.clusters.labels.tolist() == d_exact.clusters.labels.tolist() == [0, 1]
     assert d_far.goals_rc.tolist() == d_exact.goals_rc.tolist() == [[1, 1]]
@@ -286,8 +286,8 @@ def test_near_far_coscan_tours_a_far_cluster_as_the_exact_one_does() -> None:
     robots = np.array([[3, 35]], np.int32)
     far_cfg = GlobalPlanningConfig(far_above_cells=0, exact_radius_m=1.0, coarse_cell_m=0.4)
     exact, far = make_strategy("coscan"), make_strategy("coscan", far_cfg)
-    d_exact = exact.decide(state, robots, 0.2)
-    posed = far.pose(state, robots, 0.2)
+    d_exact = exact.decide(DecisionInput(state, robots, 0.2))
+    posed = far.pose(DecisionInput(state, robots, 0.2))
     d_far = far.finish(posed, far.assign(posed))
     assert d_exact.clusters.members_rc.tolist() == d_far.clusters.members_rc.tolist() == [[2, 1], [2, 4], [2, 7]]
     assert d_exact.clusters.labels.tolist() == d_far.clusters.labels.tolist() == [0, 0, 0]
@@ -303,7 +303,8 @@ def test_near_far_tour_distances_leave_the_clusters_box_through_near_far_rows() 
     # (blocks of 2 beyond the radius): a real path, not shorter than the exact one; symmetric.
     from mrexplore.paths.distance_field import distance_matrix
     from mrexplore.paths.far_field import coarse_grid
-    from mrexplore.strategies import FarDistances, _CoScanTasks, _NearFarRows
+    from mrexplore.pipeline import FarDistances
+    from mrexplore.pipeline.coscan import _CoScanTasks, _NearFarRows
 
     passable = np.ones((14, 7), bool)
     passable[0:12, 3] = False
@@ -327,7 +328,8 @@ def test_near_far_rows_and_robot_distances_fall_back_to_exact_searches_behind_a_
     # other's estimate: 5 + 2 sqrt(2) round the blocks, never shorter than the exact 7.
     from mrexplore.paths.distance_field import distance_matrix
     from mrexplore.paths.far_field import coarse_grid, far_fields
-    from mrexplore.strategies import FarDistances, _NearFarRows
+    from mrexplore.pipeline import FarDistances
+    from mrexplore.pipeline.coscan import _NearFarRows
 
     passable = ~bool_grid(NARROW_GAP)
     tasks = np.array([[0, 0], [0, 12], [0, 19]], np.int32)

@@ -88,8 +88,8 @@ def test_the_bounded_bandwidth_is_the_percentile_capped_by_the_bound(
 def test_a_pipeline_bounds_the_bandwidth_in_metres(bound_m: float | None, resolution_m: float, clusters: int) -> None:
     # The pairs above as frontier cells. 1 m is 2 cells at 0.5 m: the pairs stay apart. At 0.1 m it is 10
     # cells, above the rule's 5: the paper's clusters, as with no bound.
+    from mrexplore.pipeline import CandidateQuery, make_strategy
     from mrexplore.preprocessing.frontiers import Frontiers
-    from mrexplore.strategies import CandidateQuery, make_strategy
 
     un = np.zeros((3, 24), dtype=bool)
     for s in (0, 6, 12, 18):
@@ -220,8 +220,8 @@ def test_a_pipeline_splits_for_its_team_only_frontiers_long_enough(resolution_m:
     # A straight 30-cell frontier: Mean-Shift gives 5 clusters of 5-8 members, fewer than 7 robots. At
     # 0.1 m a cluster holds under 1 m of frontier, under the 12 m floor: the paper's clusters stay. At
     # 2 m the floor is 6 members: the largest clusters are cut until there is one per robot.
+    from mrexplore.pipeline import CandidateQuery, make_strategy
     from mrexplore.preprocessing.frontiers import Frontiers
-    from mrexplore.strategies import CandidateQuery, make_strategy
 
     un = np.zeros((5, 40), dtype=bool)
     un[2, 5:35] = True

@@ -8,16 +8,16 @@ from dataclasses import replace
 import numpy as np
 
 from mrexplore.config import MapConfig, SimConfig
-from mrexplore.global_planning.learned.expert import known_world_returns
 from mrexplore.global_planning.protocol import UNASSIGNED
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission
-from mrexplore.strategies import make_strategy
+from mrexplore.mission import Mission, MissionSpec
+from mrexplore.pipeline import make_strategy
+from mrexplore.training.expert import known_world_returns
 
 
 def _posed_mission() -> Mission:
     truth = load_map("generated:2", MapConfig(resolution_m=0.1))
-    m = Mission(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=4, progress=False)
+    m = Mission(MissionSpec(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=4), progress=False)
     for _ in range(3):
         assert m.advance()
         m.decide()

@@ -9,12 +9,12 @@ import numpy as np
 import torch
 
 from mrexplore.config import LearnedConfig, TrainConfig
-from mrexplore.global_planning.learned.expert import ExpertLabel
 from mrexplore.global_planning.learned.features import CLUSTER_FEATURES, EDGE_FEATURES, ROBOT_FEATURES, GraphInputs
 from mrexplore.global_planning.learned.network import MultiGraphNet, collate
 from mrexplore.global_planning.learned.policy import hungarian_decode, sample_sequential, sequential_log_prob
-from mrexplore.global_planning.learned.ppo import ppo_loss
-from mrexplore.global_planning.learned.trainer import _fit_imitation
+from mrexplore.training.expert import ExpertLabel
+from mrexplore.training.ppo import ppo_loss
+from mrexplore.training.trainer import _fit_imitation
 
 R, C = 2, 3
 MATCHINGS = np.array(list(itertools.permutations(range(C), R)), dtype=np.int64)  # 6 candidates

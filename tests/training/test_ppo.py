@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import torch
 
-from mrexplore.global_planning.learned.ppo import gae, listwise_loss, ppo_loss
+from mrexplore.training.ppo import gae, listwise_loss, ppo_loss
 
 
 def test_gae_by_hand() -> None:

@@ -11,7 +11,7 @@ import torch
 
 from mrexplore.config import NcmTrainConfig, TrainConfig
 from mrexplore.global_planning.learned.checkpoint import load_policy
-from mrexplore.global_planning.learned.trainer import LOG_COLUMNS, split_maps, train
+from mrexplore.training.trainer import LOG_COLUMNS, split_maps, train
 from mrexplore.types import MrExploreError
 
 TINY = TrainConfig(
@@ -99,7 +99,7 @@ def test_relative_score_is_against_the_heuristic_and_picks_the_stage_kept(tmp_pa
 def test_validate_policy_gives_steps_to_the_end_and_to_99_per_map_in_order() -> None:
     from dataclasses import replace
 
-    from mrexplore.global_planning.learned.trainer import FRESH_SEED0, validate_policy
+    from mrexplore.training.trainer import FRESH_SEED0, validate_policy
 
     maps = [f"varied:{FRESH_SEED0 + i}" for i in (1, 0)]
     got_maps, steps, cov = validate_policy(None, replace(TINY, max_steps=400), None, workers=2, maps=maps)
@@ -114,7 +114,7 @@ def test_validation_comes_back_in_the_maps_order_whatever_finishes_first(monkeyp
     # Workers hand results back as they finish; a runner that hands them back last first stands in for that.
     from dataclasses import replace
 
-    from mrexplore.global_planning.learned import trainer as tr
+    from mrexplore.training import trainer as tr
 
     def last_first(self: object, jobs: list, deadline: float) -> Iterator[dict]:
         yield from reversed([tr._run_job(j) for j in jobs])
@@ -131,7 +131,7 @@ def test_validation_comes_back_in_the_maps_order_whatever_finishes_first(monkeyp
 def test_validation_episodes_have_the_configured_team(monkeypatch: pytest.MonkeyPatch) -> None:
     from dataclasses import replace
 
-    from mrexplore.global_planning.learned import trainer
+    from mrexplore.training import trainer
 
     teams: list[int] = []
 
@@ -178,7 +178,7 @@ def test_validation_maps_are_held_out(tmp_path: Path) -> None:
 
 def test_training_episodes_take_the_run_settings_and_keep_faults_inside_the_team() -> None:
     from mrexplore.config import FaultConfig, MissionConfig, SensorConfig, SimConfig
-    from mrexplore.global_planning.learned.trainer import _Job, _mission, _pipeline
+    from mrexplore.training.trainer import _Job, _mission, _pipeline
 
     faults = FaultConfig(robot_failures=((0, 50), (3, 20)), message_loss=0.2)
     job = _Job(
@@ -246,7 +246,7 @@ def test_ncm_rewards_sum_to_its_area_formula() -> None:
     sum to the same formula over the whole span from the first decision to the end."""
     import numpy as np
 
-    from mrexplore.global_planning.learned.trainer import NcmActorCritic, _Job, _run_ncm, _weights
+    from mrexplore.training.trainer import NcmActorCritic, _Job, _run_ncm, _weights
 
     torch.manual_seed(0)
     net = NcmActorCritic()
@@ -257,7 +257,7 @@ def test_ncm_rewards_sum_to_its_area_formula() -> None:
     assert all(0 < d <= 1 for d in out["discounts"][:-1])
     # the same episode again, counting area and steps from the first decision on
     from mrexplore.global_planning.learned.ncm_network import NcmPlanner
-    from mrexplore.global_planning.learned.trainer import _mission, _ncm_pipeline
+    from mrexplore.training.trainer import _mission, _ncm_pipeline
 
     planner = NcmPlanner(net.actor, sample=True, critic=net.critic, record=[])
     m = _mission(job, _ncm_pipeline(planner))

@@ -32,9 +32,9 @@ from mrexplore.config import MapConfig, RunConfig, TrainConfig, config_to_dict
 from mrexplore.csv_append import append_row, drop_partial_tail
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.maps.loaders import is_generator_spec, load_map
-from mrexplore.mission import run_mission
+from mrexplore.mission import MissionSpec, run_mission
+from mrexplore.pipeline import make_strategy, policy_for, strategy_spec
 from mrexplore.safe_yaml import load_yaml_file
-from mrexplore.strategies import LEARNED, NO_LOCAL_SUFFIX, make_strategy, policy_for
 from mrexplore.threads import THREADS_ENV
 from mrexplore.types import MrExploreError
 from mrexplore.workers import stop_pool, worker_pool
@@ -99,16 +99,12 @@ class EpisodeSpec:
     @property
     def policy_sha256(self) -> str:
         """sha256 of the policy a learned strategy runs ('' for the others)."""
-        kind = LEARNED.get(_base_name(self.strategy))
+        kind = strategy_spec(self.strategy).policy_kind
         return _policy_sha(kind, policy_for(self.strategy, self.policy)) if kind is not None else ""
 
     @property
     def key(self) -> tuple[str, str, int, int, str, str]:
         return (self.map_resolved, self.strategy, self.robots, self.seed, self.settings, self.policy_sha256)
-
-
-def _base_name(strategy: str) -> str:
-    return strategy.removesuffix(NO_LOCAL_SUFFIX)
 
 
 @functools.lru_cache(maxsize=16)
@@ -196,7 +192,7 @@ def run_episode(spec: EpisodeSpec) -> dict[str, Any]:
         coscan_cfg=run.coscan,
     )
     result = run_mission(
-        truth, strategy, replace(run.sim, robots=spec.robots), run.mission, seed=spec.seed, progress=False
+        MissionSpec(truth, strategy, replace(run.sim, robots=spec.robots), run.mission, seed=spec.seed), progress=False
     )
     sim = result.sim
     free_m2 = float((sim.explorable & ~truth.occupied).sum()) * truth.resolution_m**2

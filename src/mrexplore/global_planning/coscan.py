@@ -2,7 +2,7 @@
 clustering with split and merge, Hungarian assignment, and a 2-opt tour per robot.
 
 Pure functions on distance matrices (or, on large maps, their rows searched on demand: :data:`TaskRows`);
-the pipeline that feeds them is ``strategies.CoScanPipeline``.
+the pipeline that feeds them is ``pipeline.coscan.CoScanPipeline``.
 """
 
 from __future__ import annotations

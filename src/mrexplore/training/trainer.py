@@ -30,14 +30,6 @@ from tqdm import tqdm
 from mrexplore.config import MapConfig, MissionConfig, SimConfig, TrainConfig, config_to_dict
 from mrexplore.csv_append import append_row, drop_partial_tail, keep_rows
 from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS, code_version, save_policy
-from mrexplore.global_planning.learned.curve import plot_learning_curve
-from mrexplore.global_planning.learned.expert import (
-    ExpertLabel,
-    candidate_assignments,
-    known_world_returns,
-    lookahead_returns,
-    privileged_scalars,
-)
 from mrexplore.global_planning.learned.features import EDGE_FEATURES, GraphInputs, graph_inputs
 from mrexplore.global_planning.learned.ncm_network import (
     NcmCritic,
@@ -54,14 +46,22 @@ from mrexplore.global_planning.learned.policy import (
     assignment_score,
     sequential_log_prob,
 )
-from mrexplore.global_planning.learned.ppo import PPOStats, gae, listwise_loss, ppo_loss
-from mrexplore.global_planning.learned.search import cross_entropy_step, relative_score, search_candidates
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission
+from mrexplore.mission import Mission, MissionSpec
+from mrexplore.pipeline import ExplorationPipeline, NcmPipeline, make_strategy
 from mrexplore.sim.measures import steps_to_coverage
-from mrexplore.strategies import ExplorationPipeline, NcmPipeline, make_strategy
 from mrexplore.threads import THREADS_ENV
+from mrexplore.training.curve import plot_learning_curve
+from mrexplore.training.expert import (
+    ExpertLabel,
+    candidate_assignments,
+    known_world_returns,
+    lookahead_returns,
+    privileged_scalars,
+)
+from mrexplore.training.ppo import PPOStats, gae, listwise_loss, ppo_loss
+from mrexplore.training.search import cross_entropy_step, relative_score, search_candidates
 from mrexplore.types import MrExploreError
 from mrexplore.workers import stop_pool, worker_pool
 
@@ -178,11 +178,11 @@ def _mission(job: _Job, pipeline: ExplorationPipeline) -> Mission:
         baseline_bytes=False,
     )
     sim = replace(job.sim or SimConfig(), robots=job.robots)
-    return Mission(truth, pipeline, sim, cfg, seed=job.seed, progress=False)
+    return Mission(MissionSpec(truth, pipeline, sim, cfg, seed=job.seed), progress=False)
 
 
 def _episode_stats(m: Mission, decisions: int) -> dict[str, float]:
-    s99 = steps_to_coverage(np.asarray(m.curve), 0.99)
+    s99 = steps_to_coverage(np.asarray(m.record.curve), 0.99)
     return {
         "steps": m.steps,
         "steps_99": m.steps if s99 is None else s99,  # never there: all its steps, as the bench report counts

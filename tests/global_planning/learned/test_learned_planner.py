@@ -17,9 +17,9 @@ from mrexplore.global_planning.learned.network import MultiGraphNet, collate
 from mrexplore.global_planning.learned.policy import LearnedPlanner
 from mrexplore.global_planning.protocol import AssignmentProblem
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission, run_mission
+from mrexplore.mission import Mission, MissionSpec, run_mission
+from mrexplore.pipeline import make_strategy
 from mrexplore.preprocessing.clustering import Clusters
-from mrexplore.strategies import make_strategy
 from mrexplore.types import MrExploreError
 
 TIMING = {"wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb", "onboard_ms_median", "onboard_ms_p95"}
@@ -85,8 +85,10 @@ def test_a_silent_scoring_mlp_is_skipped_with_the_same_costs() -> None:
 def test_zero_residual_hier_runs_exactly_as_hier_heuristic(tmp_path: Path) -> None:
     save_policy(tmp_path / "zero.pt", _untrained())
     truth = load_map("generated:5", MapConfig(resolution_m=0.1))
-    a = run_mission(truth, make_strategy("hier", policy=str(tmp_path / "zero.pt")), SimConfig(robots=3), seed=2)
-    b = run_mission(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=2)
+    a = run_mission(
+        MissionSpec(truth, make_strategy("hier", policy=str(tmp_path / "zero.pt")), SimConfig(robots=3), seed=2)
+    )
+    b = run_mission(MissionSpec(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=2))
     da, db = a.measures.to_dict(), b.measures.to_dict()
     assert {k: v for k, v in da.items() if k not in TIMING} == {k: v for k, v in db.items() if k not in TIMING}
 
@@ -95,7 +97,9 @@ def test_shipped_policy_loads_by_default_and_explores() -> None:
     s = make_strategy("hier")
     assert s.policy is not None and s.policy["path"].endswith("pretrained/policy.pt") and len(s.policy["sha256"]) == 64
     assert Path(s.policy["path"]).stat().st_size < 2_000_000
-    m = run_mission(load_map("generated:3", MapConfig(resolution_m=0.1)), s, SimConfig(robots=2), seed=1).measures
+    m = run_mission(
+        MissionSpec(load_map("generated:3", MapConfig(resolution_m=0.1)), s, SimConfig(robots=2), seed=1)
+    ).measures
     assert m.coverage >= 0.99
 
 
@@ -128,7 +132,7 @@ def test_snapshot_restore_replays_exactly_and_pose_commit_equals_decide() -> Non
             m.decide()
         return {k: v for k, v in m.result().measures.to_dict().items() if k not in TIMING}
 
-    m = Mission(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=4, progress=False)
+    m = Mission(MissionSpec(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=4), progress=False)
     for _ in range(5):
         assert m.advance()
         m.decide()
@@ -138,7 +142,7 @@ def test_snapshot_restore_replays_exactly_and_pose_commit_equals_decide() -> Non
     m.restore(snap)
     assert finish(m) == first
     # the same decisions taken in two halves
-    m2 = Mission(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=4, progress=False)
+    m2 = Mission(MissionSpec(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=4), progress=False)
     while m2.advance():
         if m2.pose() is not None:
             m2.commit()
@@ -174,7 +178,9 @@ def test_shipped_ncm_policy_loads_by_default_and_explores(name: str) -> None:
     s = make_strategy(name)
     assert s.policy is not None and s.policy["path"].endswith("pretrained/ncm.pt")
     assert Path(s.policy["path"]).stat().st_size < 2_000_000
-    m = run_mission(load_map("generated:3", MapConfig(resolution_m=0.1)), s, SimConfig(robots=2), seed=1).measures
+    m = run_mission(
+        MissionSpec(load_map("generated:3", MapConfig(resolution_m=0.1)), s, SimConfig(robots=2), seed=1)
+    ).measures
     assert m.coverage >= 0.99 and m.done_reason == "no_frontiers"
 
 

@@ -87,8 +87,8 @@ def test_the_ncm_pipeline_decides_on_pooled_nodes_and_explores_a_map() -> None:
     from mrexplore.config import MapConfig, MissionConfig, SimConfig
     from mrexplore.global_planning.learned.ncm_network import NcmPlanner
     from mrexplore.maps.loaders import load_map
-    from mrexplore.mission import run_mission
-    from mrexplore.strategies import NcmPipeline
+    from mrexplore.mission import MissionSpec, run_mission
+    from mrexplore.pipeline import DecisionInput, NcmPipeline
 
     torch.manual_seed(3)
     grid = state_grid(
@@ -103,7 +103,7 @@ def test_the_ncm_pipeline_decides_on_pooled_nodes_and_explores_a_map() -> None:
         """
     )
     pipeline = NcmPipeline("ncm", NcmPlanner(NcmNet()))
-    d = pipeline.decide(grid, np.array([[3, 2], [3, 4]], np.int32), 0.1)
+    d = pipeline.decide(DecisionInput(grid, np.array([[3, 2], [3, 4]], np.int32), 0.1))
     # F_un is column 10, rows 1-5; rows 1-2 and 4-5 lie within 0.2 m of a wall, so one clear cell, (3, 10),
     # and one node; both robots may take it (NCM's robots choose independently).
     assert d.clusters.centers_rc.tolist() == [[3, 10]]
@@ -111,7 +111,9 @@ def test_the_ncm_pipeline_decides_on_pooled_nodes_and_explores_a_map() -> None:
     truth = load_map("generated:3", MapConfig(resolution_m=0.2))
     for sample in (False, True):
         planner = NcmPlanner(NcmNet(), sample=sample)
-        m = run_mission(truth, NcmPipeline("ncm", planner), SimConfig(robots=2), MissionConfig(max_steps=3000), seed=1)
+        m = run_mission(
+            MissionSpec(truth, NcmPipeline("ncm", planner), SimConfig(robots=2), MissionConfig(max_steps=3000), seed=1)
+        )
         assert m.measures.done_reason == "no_frontiers" and m.measures.coverage >= 0.99
 
 

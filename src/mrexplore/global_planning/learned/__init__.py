@@ -1,1 +1,4 @@
-"""Layer 2, learned (paper IV-B): the mGNN, its policy, PPO and imitation, the trainer; the only place torch lives."""
+"""Layer 2, learned (paper IV-B): the mGNN and NeuralCoMapping networks, their policies and checkpoints.
+
+Inference only; training lives in :mod:`mrexplore.training`.
+"""
