@@ -14,7 +14,7 @@ from mrexplore.global_planning.learned.network import MultiGraphNet, collate
 from mrexplore.global_planning.learned.policy import hungarian_decode, sample_sequential, sequential_log_prob
 from mrexplore.training.expert import ExpertLabel
 from mrexplore.training.ppo import ppo_loss
-from mrexplore.training.trainer import _fit_imitation
+from mrexplore.training.updates import fit_imitation
 
 R, C = 2, 3
 MATCHINGS = np.array(list(itertools.permutations(range(C), R)), dtype=np.int64)  # 6 candidates
@@ -57,7 +57,7 @@ def test_listwise_imitation_learns_the_known_optimum() -> None:
     before = _hit_rate(net, test)  # the heuristic alone
     data = [ExpertLabel(g, MATCHINGS, r) for g, r in train]
     opt = torch.optim.Adam(net.parameters(), lr=3e-3)
-    _fit_imitation(net, opt, data, TrainConfig(imitation_epochs=40, return_temperature=0.5, residual_l2=0.0), rng)
+    fit_imitation(net, opt, data, TrainConfig(imitation_epochs=40, return_temperature=0.5, residual_l2=0.0), rng)
     after = _hit_rate(net, test)
     assert before < 0.5
     assert after >= 0.85, (before, after)

@@ -115,9 +115,10 @@ def test_validation_comes_back_in_the_maps_order_whatever_finishes_first(monkeyp
     from dataclasses import replace
 
     from mrexplore.training import trainer as tr
+    from mrexplore.training.episodes import run_job
 
     def last_first(self: object, jobs: list, deadline: float) -> Iterator[dict]:
-        yield from reversed([tr._run_job(j) for j in jobs])
+        yield from reversed([run_job(j) for j in jobs])
 
     monkeypatch.setattr(tr._Runner, "run", last_first)
     cfg = replace(TINY, max_steps=400)
@@ -132,10 +133,11 @@ def test_validation_episodes_have_the_configured_team(monkeypatch: pytest.Monkey
     from dataclasses import replace
 
     from mrexplore.training import trainer
+    from mrexplore.training.episodes import EpisodeJob
 
     teams: list[int] = []
 
-    def results(self: object, jobs: list[trainer._Job], timeout: float) -> list[dict[str, float]]:
+    def results(self: object, jobs: list[EpisodeJob], timeout: float) -> list[dict[str, float]]:
         teams.extend(j.robots for j in jobs)
         return [{"steps": 10, "steps_99": 8, "coverage": 1.0} for _ in jobs]
 
@@ -178,11 +180,11 @@ def test_validation_maps_are_held_out(tmp_path: Path) -> None:
 
 def test_training_episodes_take_the_run_settings_and_keep_faults_inside_the_team() -> None:
     from mrexplore.config import FaultConfig, MissionConfig, SensorConfig, SimConfig
-    from mrexplore.training.trainer import _Job, _mission, _pipeline
+    from mrexplore.training.episodes import EpisodeJob, JobKind, episode_mission, hier_pipeline
 
     faults = FaultConfig(robot_failures=((0, 50), (3, 20)), message_loss=0.2)
-    job = _Job(
-        "eval",
+    job = EpisodeJob(
+        JobKind.EVAL,
         "generated:2",
         2,
         0,
@@ -191,7 +193,7 @@ def test_training_episodes_take_the_run_settings_and_keep_faults_inside_the_team
         sim=SimConfig(sensor=SensorConfig(range_m=4.0)),
         mission=MissionConfig(faults=faults),
     )
-    m = _mission(job, _pipeline(None))
+    m = episode_mission(job, hier_pipeline(None))
     assert m.mission_cfg.max_steps == 77 and m.sim_cfg.robots == 2 and m.sim_cfg.sensor.range_m == 4.0
     assert m.mission_cfg.faults.robot_failures == ((0, 50),)  # robot 3 is not in a team of 2
     assert m.mission_cfg.faults.message_loss == 0.2
@@ -246,21 +248,21 @@ def test_ncm_rewards_sum_to_its_area_formula() -> None:
     sum to the same formula over the whole span from the first decision to the end."""
     import numpy as np
 
-    from mrexplore.training.trainer import NcmActorCritic, _Job, _run_ncm, _weights
+    from mrexplore.training.episodes import EpisodeJob, JobKind, NcmActorCritic, _run_ncm, weights_of
 
     torch.manual_seed(0)
     net = NcmActorCritic()
-    job = _Job("ppo", "generated:4", 2, 9, _weights(net), NCM_TINY)
+    job = EpisodeJob(JobKind.PPO, "generated:4", 2, 9, weights_of(net), NCM_TINY)
     out = _run_ncm(job, net.eval())
     rec, rewards = out["steps_rec"], out["rewards"]
     assert len(rec) == len(rewards) == len(out["discounts"]) == out["decisions"] > 1
     assert all(0 < d <= 1 for d in out["discounts"][:-1])
     # the same episode again, counting area and steps from the first decision on
     from mrexplore.global_planning.learned.ncm_network import NcmPlanner
-    from mrexplore.training.trainer import _mission, _ncm_pipeline
+    from mrexplore.training.episodes import episode_mission, ncm_pipeline
 
     planner = NcmPlanner(net.actor, sample=True, critic=net.critic, record=[])
-    m = _mission(job, _ncm_pipeline(planner))
+    m = episode_mission(job, ncm_pipeline(planner))
     first: tuple[int, int] | None = None
     while m.advance():
         planner.value_extra = np.zeros(4, np.float32)

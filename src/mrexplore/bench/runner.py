@@ -18,7 +18,6 @@ import json
 import os
 import sys
 from collections.abc import Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -28,16 +27,15 @@ import yaml
 from PIL import Image
 from tqdm import tqdm
 
-from mrexplore.config import MapConfig, RunConfig, TrainConfig, config_to_dict
+from mrexplore.config import RunConfig, TrainConfig, config_to_dict
 from mrexplore.csv_append import append_row, drop_partial_tail
-from mrexplore.maps.ground_truth import GroundTruthMap
-from mrexplore.maps.loaders import is_generator_spec, load_map
+from mrexplore.maps.loaders import is_generator_spec, load_map_shared
 from mrexplore.mission import MissionSpec, run_mission
 from mrexplore.pipeline import make_strategy, policy_for, strategy_spec
 from mrexplore.safe_yaml import load_yaml_file
 from mrexplore.threads import THREADS_ENV
 from mrexplore.types import MrExploreError
-from mrexplore.workers import stop_pool, worker_pool
+from mrexplore.workers import JobRunner
 
 __all__ = [
     "EpisodeSpec",
@@ -170,19 +168,10 @@ def parse_curve(text: str) -> tuple[np.ndarray, np.ndarray]:
     return np.array([int(a) for a, _ in pairs]), np.array([float(b) for _, b in pairs])
 
 
-@functools.lru_cache(maxsize=2)
-def _load_shared(map_path: str, cfg: MapConfig) -> GroundTruthMap:
-    """A worker runs the episodes of one map one after another: load it once (read-only, as missions
-    never write the ground truth)."""
-    truth = load_map(map_path, cfg)
-    truth.occupied.flags.writeable = False
-    return truth
-
-
 def run_episode(spec: EpisodeSpec) -> dict[str, Any]:
     """Run one episode and return its CSV row."""
     run = spec.run
-    truth = _load_shared(spec.map_path, run.map)
+    truth = load_map_shared(spec.map_path, run.map)
     strategy = make_strategy(
         spec.strategy,
         run.global_planning,
@@ -316,27 +305,14 @@ def run_bench(
     total = len({s.key for s in specs})
     bar = tqdm(total=total, initial=total - len(todo), unit="ep", disable=not show)
     workers = workers or os.cpu_count() or 1
-    if ray_address is not None:
-        _run_ray(todo, results_csv, workers, ray_address, bar)
-    elif workers == 1:
-        for s in todo:
-            append_row(results_csv, COLUMNS, run_episode(s))
+    # Episodes already fill the cores: each local worker's kernels run on as many threads as are left over;
+    # a Ray task has one CPU, so its kernels run on one thread.
+    threads = max(1, (os.cpu_count() or 1) // workers)
+    runner = JobRunner(run_episode, workers, ray_address, _set_threads, (threads,), {THREADS_ENV: "1"})
+    with runner:
+        for row in runner.run(todo):
+            append_row(results_csv, COLUMNS, row)
             bar.update()
-    else:
-        # Episodes already fill the cores: each worker's kernels run on as many threads as are left over.
-        threads = max(1, (os.cpu_count() or 1) // workers)
-        pool = worker_pool(workers, _set_threads, (threads,))
-        try:
-            pending: set[Future[dict[str, Any]]] = {pool.submit(run_episode, s) for s in todo}
-            while pending:
-                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for fut in finished:
-                    append_row(results_csv, COLUMNS, fut.result())
-                    bar.update()
-        except BaseException:
-            stop_pool(pool)  # a kill, an interrupt or a failed episode: no worker runs on
-            raise
-        pool.shutdown()
     bar.close()
     return len(todo)
 
@@ -361,29 +337,6 @@ def _area_hint(map_path: str) -> float:
 
 def _set_threads(threads: int) -> None:
     os.environ[THREADS_ENV] = str(threads)
-
-
-def _run_ray(todo: list[EpisodeSpec], results_csv: Path, workers: int, address: str, bar: tqdm) -> None:
-    try:
-        import ray
-    except ImportError:
-        raise MrExploreError("--ray-address needs Ray; install it with: pip install 'mrexplore[ray]'") from None
-    started = not ray.is_initialized()
-    if started:
-        kwargs: dict[str, Any] = {"num_cpus": workers} if address == "local" else {"address": address}
-        ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
-    try:
-        # One CPU per task: the task's kernels run on one thread.
-        remote = ray.remote(num_cpus=1, runtime_env={"env_vars": {THREADS_ENV: "1"}})(run_episode)
-        pending = [remote.remote(s) for s in todo]
-        while pending:
-            finished, pending = ray.wait(pending, num_returns=1)
-            for ref in finished:
-                append_row(results_csv, COLUMNS, ray.get(ref))
-                bar.update()
-    finally:
-        if started:
-            ray.shutdown()
 
 
 def expand_maps(items: Sequence[str]) -> list[str]:

@@ -7,6 +7,7 @@ the outside (free space touching the border) turned into obstacle. Bad files rai
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import warnings
@@ -24,7 +25,15 @@ from mrexplore.maps.resample import resample_obstacles
 from mrexplore.safe_yaml import load_yaml_file
 from mrexplore.types import MrExploreError
 
-__all__ = ["load_map", "is_generator_spec", "DEFAULT_MAP", "GRAYSCALE_PIXEL_M", "DUNGEON_PIXEL_M", "HOUSEEXPO_RASTER_M"]
+__all__ = [
+    "load_map",
+    "load_map_shared",
+    "is_generator_spec",
+    "DEFAULT_MAP",
+    "GRAYSCALE_PIXEL_M",
+    "DUNGEON_PIXEL_M",
+    "HOUSEEXPO_RASTER_M",
+]
 
 DEFAULT_MAP = "generated:0"
 """The built-in map: a procedural floor plan (license-clean, made here from a seed)."""
@@ -92,6 +101,15 @@ def load_map(spec: str | Path, cfg: MapConfig | None = None) -> GroundTruthMap:
     raise MrExploreError(
         f"unsupported map format {suffix!r}: {path}; use a ROS .yaml, a .png/.pgm image or a HouseExpo .json"
     )
+
+
+@functools.lru_cache(maxsize=2)
+def load_map_shared(spec: str, cfg: MapConfig) -> GroundTruthMap:
+    """:func:`load_map`, kept for the next episodes of the same map in this process (a bench's or a
+    trainer's worker runs them one after another) and read-only, as missions never write the ground truth."""
+    truth = load_map(spec, cfg)
+    truth.occupied.flags.writeable = False
+    return truth
 
 
 def is_generator_spec(text: str) -> bool:
