@@ -214,7 +214,7 @@ def test_config_file_errors(files, capsys, name: str, message: str) -> None:
 def test_config_prints_defaults_that_read_back(tmp_path, capsys) -> None:
     assert main(["config"]) == 0
     text = capsys.readouterr().out
-    assert "# Maximum range, metres, > 0 (paper: 6 m).\n    range_m: 6.0\n" in text
+    assert "# Maximum range, metres (paper: 6 m). Allowed: > 0 metres.\n    range_m: 6.0\n" in text
     assert config_from_dict(RunConfig, yaml.safe_load(text)) == RunConfig()
 
 

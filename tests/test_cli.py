@@ -106,7 +106,10 @@ def test_given_starts(capsys) -> None:
             ["--resolution", "0"],
             "mrexplore: error: argument --resolution: must be a number > 0, got '0'; see 'mrexplore explore --help'",
         ),
-        (["--commitment", "2"], "mrexplore: error: commitment must be in [0, 1] or None, got 2.0"),
+        (
+            ["--commitment", "2"],
+            "mrexplore: error: commitment must be in [0, 1], or null for the strategy's default, got 2.0",
+        ),
         (
             ["--save-map", "no/such/folder/map"],
             "mrexplore: error: --save-map folder no/such/folder does not exist; create it first",
