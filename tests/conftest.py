@@ -9,11 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mrexplore.example_maps import maps_dir
 from mrexplore.maps.frame import GridFrame
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.types import CellState
 
-SHARED_MAPS = Path(__file__).resolve().parents[1].parent / "shared" / "maps"
+SHARED_MAPS = maps_dir().resolve()
+"""The example maps: ``$MREXPLORE_MAPS``, else ../shared/maps from the repository root (where pytest runs)."""
 
 _STATE = {".": CellState.FREE, "#": CellState.OCCUPIED, "?": CellState.UNKNOWN}
 
@@ -56,7 +58,7 @@ def truth_map(text: str, resolution_m: float = 0.05, name: str = "ascii") -> Gro
 
 def require_shared_maps() -> Path:
     if not SHARED_MAPS.is_dir():
-        pytest.skip(f"shared maps not found at {SHARED_MAPS}; real-map tests need ../shared/maps beside the repo")
+        pytest.skip(f"example maps not found at {SHARED_MAPS}; real-map tests need them (set MREXPLORE_MAPS)")
     return SHARED_MAPS
 
 

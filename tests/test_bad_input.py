@@ -278,13 +278,14 @@ def test_hostile_policy_files(tmp_path, capsys) -> None:
     assert "does not fit this network" in _err(capsys)
 
 
-@pytest.mark.parametrize(
-    "script", ["profile_decision.py", "bench_step_and_decision.py", "bench_fields.py", "convoy.py", "onboard_parts.py"]
-)
-def test_perf_scripts_give_one_line_on_bad_input(script: str) -> None:
-    perf = Path(__file__).resolve().parents[1] / "perf"
+@pytest.mark.parametrize("script", ["profile_decision.py", "step_and_decision.py", "fields.py", "meanshift.py"])
+def test_benchmarks_give_one_line_on_bad_input(script: str) -> None:
+    benchmarks = Path(__file__).resolve().parents[1] / "benchmarks"
     out = subprocess.run(
-        [sys.executable, str(perf / script), "--map", "no_such_map.yaml"], capture_output=True, text=True, timeout=300
+        [sys.executable, str(benchmarks / script), "--map", "no_such_map.yaml"],
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
     assert out.returncode == 2
     fix = "pass an existing map file with --map"

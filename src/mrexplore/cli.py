@@ -7,13 +7,14 @@ import json
 import math
 import os
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
 
+from mrexplore.bench.compare import TABLE_I, compare_runs, table_time, team_ratio
 from mrexplore.bench.report import write_report
 from mrexplore.bench.runner import EpisodeSpec, expand_maps, run_bench
 from mrexplore.config import (
@@ -28,6 +29,7 @@ from mrexplore.config import (
     config_yaml,
     read_config_file,
 )
+from mrexplore.example_maps import MAPS_ENV, maps_dir
 from mrexplore.maps.loaders import DEFAULT_MAP, load_map
 from mrexplore.maps.map_saver import save_ros_map
 from mrexplore.mission import MissionSpec, run_mission
@@ -50,7 +52,6 @@ POLICY_HELP = (
     "weights of the learned strategies (hier, ncm), written by 'mrexplore train': FILE, or KIND=FILE pairs "
     "(hier=A.pt,ncm=B.pt) where a run has both (default: the shipped policies)"
 )
-DEFAULT_TRAIN_MAPS = Path("..") / "shared" / "maps" / "train"
 MIN_REPLAN_HELP = (
     "steps a robot whose goal was seen drives on before the team replans "
     f"(default {MissionConfig.min_replan_steps}; 1: at once)"
@@ -160,6 +161,11 @@ def _add_progress(p: argparse.ArgumentParser) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="mrexplore", description="Multi-robot exploration with a hierarchical planner.")
+    parser.add_argument(
+        "--maps-dir",
+        default=None,
+        help=f"where the example maps are (training maps in train/); default ${MAPS_ENV}, else ../shared/maps",
+    )
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     ex = sub.add_parser("explore", help="explore one map and report the measures")
     ex.add_argument(
@@ -264,15 +270,101 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--seed", type=_SEED, default=0, help="seed of the run (default 0)")
     tr.add_argument(
         "--train-maps",
-        default=str(DEFAULT_TRAIN_MAPS),
-        help="folder of training maps (DungeonMaps PNGs; default ../shared/maps/train); procedural plans always",
+        default=None,
+        help="folder of training maps (DungeonMaps PNGs; default: train/ of the example maps, --maps-dir); "
+        "procedural plans always",
     )
     _add_config_flags(tr, "train reads its train, sim and mission sections; flags override it")
     _add_progress(tr)
     sub.add_parser(
         "config", help="print every setting with its default as a YAML file for --config", description=CONFIG_HEADER
     )
+    _add_report(sub)
     return parser
+
+
+def _add_report(sub: Any) -> None:
+    rp = sub.add_parser("report", help="compare benches or policies already run (paired, teams, table-time, policies)")
+    kinds = rp.add_subparsers(dest="report", required=True, parser_class=_Parser)
+    pa = kinds.add_parser("paired", help="one strategy across separate benches, paired episode by episode")
+    pa.add_argument(
+        "--runs",
+        nargs="+",
+        required=True,
+        metavar="LABEL=DIR[@STRATEGY]",
+        help="bench folders of the same episodes, the reference first; @STRATEGY: another strategy's rows",
+    )
+    pa.add_argument("--train", nargs="*", default=[], metavar="LABEL=DIR", help="the train folder of a label's policy")
+    pa.add_argument("--strategy", default=DEFAULT_STRATEGY, help=f"whose rows to compare (default {DEFAULT_STRATEGY})")
+    pa.add_argument("--common", action="store_true", help="keep only the episodes every run holds")
+    pa.add_argument("--out", default=None, help="also write the markdown here")
+    te = kinds.add_parser("teams", help="steps a larger team needs against a smaller one, paired by map and seed")
+    te.add_argument("--runs", nargs="+", required=True, help="bench folders, oldest first (later rows win)")
+    te.add_argument("--small", type=_COUNT, default=8, help="the smaller team (default 8)")
+    te.add_argument("--large", type=_COUNT, default=16, help="the larger team (default 16)")
+    te.add_argument("--strategy", default=DEFAULT_STRATEGY, help=f"default {DEFAULT_STRATEGY}")
+    tt = kinds.add_parser("table-time", help="how long a whole table would take, from episodes already timed")
+    tt.add_argument("--runs", nargs="+", required=True, help="bench folders, oldest first (later rows win)")
+    tt.add_argument("--seeds", type=_COUNT, default=3, help="seeds of the table (default 3)")
+    tt.add_argument("--workers", type=_COUNT, default=2, help="workers of the table (default 2)")
+    tt.add_argument("--strategies", default=",".join(TABLE_I), help="comma-separated (default Table I's seven)")
+    po = kinds.add_parser("policies", help="policy files against the heuristic on maps no dev set holds")
+    po.add_argument("policies", nargs="+", help="policy files (.pt), the first is the yardstick")
+    po.add_argument("--fresh", type=_SEED, default=0, help="N fresh varied: plans instead of the validation maps")
+    po.add_argument("--robots", type=_COUNT, default=None, help="robots per episode (default: train.val_robots)")
+    po.add_argument("--workers", type=_WORKERS, default=0, help="worker processes (default: one per core)")
+    po.add_argument("--train-maps", default=None, help="folder of training maps (default: train/ of the example maps)")
+    po.add_argument("--csv", default=None, help="write every map's results per policy here")
+
+
+def _labelled(items: Sequence[str], flag: str) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for item in items:
+        label, sep, path = item.partition("=")
+        if not sep or not label or not path:
+            raise MrExploreError(f"{flag} {item!r} must be LABEL=DIR; name each folder")
+        out[label] = path
+    return out
+
+
+def _folders(items: Sequence[str]) -> list[Path]:
+    for item in items:
+        if not Path(item).is_dir():
+            raise MrExploreError(f"--runs folder {item} not found; give folders that 'mrexplore bench --out' wrote")
+    return [Path(i) for i in items]
+
+
+def _train_maps(given: str | None) -> Path | None:
+    """The training maps' folder: the one given, else ``train/`` of the example maps; None where absent."""
+    folder = Path(given) if given is not None else maps_dir() / "train"
+    return folder if folder.is_dir() else None
+
+
+def _report(args: argparse.Namespace, argv: Sequence[str]) -> str:
+    if args.report == "paired":
+        runs = _labelled(args.runs, "--runs")
+        trains = {k: Path(v) for k, v in _labelled(args.train, "--train").items()}
+        text = compare_runs(runs, args.strategy, trains, args.common, "mrexplore " + " ".join(argv))
+        if args.out:
+            Path(args.out).write_text(text)
+        return text
+    if args.report == "teams":
+        return team_ratio(_folders(args.runs), args.small, args.large, args.strategy)
+    if args.report == "table-time":
+        return table_time(_folders(args.runs), args.seeds, args.workers, [s for s in args.strategies.split(",") if s])
+    import csv
+
+    from mrexplore.training.compare import compare_policies
+
+    lines, per_map = compare_policies(
+        [Path(p) for p in args.policies], _train_maps(args.train_maps), args.fresh, args.robots, args.workers
+    )
+    if args.csv is not None:
+        with open(args.csv, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(per_map[0]))
+            w.writeheader()
+            w.writerows(per_map)
+    return "\n".join(lines)
 
 
 def _ints(text: str, name: str) -> list[int]:
@@ -381,11 +473,10 @@ def _train(args: argparse.Namespace) -> str:
     if args.episodes is not None and args.episodes < 1:
         raise MrExploreError(f"--episodes must be >= 1, got {args.episodes}")
     _check_output(args.out, "--out", folder=True)
-    train_dir = Path(args.train_maps)
     result = train(
         run.train,
         Path(args.out),
-        train_dir if train_dir.is_dir() else None,
+        _train_maps(args.train_maps),
         minutes=args.minutes,
         episodes=args.episodes,
         workers=args.workers,
@@ -525,6 +616,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = build_parser().parse_args(argv)
     except SystemExit as exc:  # argparse's one-line error (exit 2) or --help (exit 0)
         return int(exc.code or 0)
+    if args.maps_dir is not None:
+        os.environ[MAPS_ENV] = args.maps_dir  # read by maps_dir() here and in spawned workers
     try:
         if args.command == "explore":
             rec = _explore(args)
@@ -535,6 +628,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(_train(args))
         elif args.command == "config":
             print(f"# {CONFIG_HEADER}\n" + config_yaml(RunConfig()), end="")
+        elif args.command == "report":
+            print(_report(args, argv))
     except MrExploreError as exc:
         print(f"mrexplore: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -542,33 +637,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("mrexplore: interrupted; finished results are kept, rerun the command to go on", file=sys.stderr)
         return EXIT_INTERRUPTED
     return 0
-
-
-def run_script(script_main: Callable[[], int | None], name: str | None = None) -> int:
-    """Run a script's ``main`` (the ``perf/`` tools) as the ``mrexplore`` command runs: bad input is one
-    line naming the problem and the fix with exit code 2, an interrupt exit code 130, no traceback.
-    ``name`` (default: the script's file name) starts the error line.
-
-    Examples
-    --------
-    >>> def bad() -> int:
-    ...     raise MrExploreError("map file not found: x.yaml; pass an existing map file with --map")
-    >>> import contextlib, io
-    >>> err = io.StringIO()
-    >>> with contextlib.redirect_stderr(err):
-    ...     code = run_script(bad, "bench_x.py")
-    >>> code, err.getvalue().strip()
-    (2, 'bench_x.py: error: map file not found: x.yaml; pass an existing map file with --map')
-    """
-    name = name or Path(sys.argv[0]).name
-    try:
-        return int(script_main() or 0)
-    except MrExploreError as exc:
-        print(f"{name}: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        print(f"{name}: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":

@@ -45,6 +45,7 @@ from mrexplore.sim.belief import classify
 from mrexplore.sim.measures import EpisodeMeasures, lower_bound_steps
 from mrexplore.sim.starts import draw_starts
 from mrexplore.sim.world import ExplorationSim, StepResult
+from mrexplore.timing import timed
 from mrexplore.types import CellState, MrExploreError
 
 __all__ = [
@@ -446,7 +447,8 @@ class Mission:
         """One simulation step (no replanning check): fail robots due to fail, drive, scan, record."""
         for robot in self.faults.failures_due(self.sim.steps):
             self.sim.fail(robot)
-        result = self.sim.step()
+        with timed(self.strategy.timer, "step"):
+            result = self.sim.step()
         self.blocked = result.blocked
         gained = self.sim.robot_known_cells > self._known_before
         self._last_gain[gained] = self.sim.steps
@@ -496,7 +498,8 @@ class Mission:
         for _ in range(self.faults.restarts_due(sim.steps)):
             link.restart_centre()
             self.blacklist = np.zeros(self.truth.shape, dtype=bool)  # the centre's memory too
-        self.state = link.exchange(sim.beliefs, sim.positions_rc, sim.alive & self._in_range())
+        with timed(self.strategy.timer, "round"):
+            self.state = link.exchange(sim.beliefs, sim.positions_rc, sim.alive & self._in_range())
         self.record.onboard_ms.extend(link.robot_ms_each)
         self._active = np.flatnonzero(link.status.assignable)
         current = self._current()

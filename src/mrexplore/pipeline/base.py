@@ -35,6 +35,7 @@ from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers, spli
 from mrexplore.preprocessing.denoise import denoised_frontier_cells
 from mrexplore.preprocessing.frontiers import Frontiers, detect_frontiers
 from mrexplore.threads import map_threads
+from mrexplore.timing import PhaseTimes, timed
 from mrexplore.types import BoolGrid, CellState, MrExploreError, StateGrid
 
 __all__ = ["ExplorationPipeline"]
@@ -119,6 +120,9 @@ class ExplorationPipeline:
     distances: GlobalPlanningConfig = field(default_factory=GlobalPlanningConfig)
     """Where robot distances stop being exact on large maps (``far_above_cells``, ``exact_radius_m``,
     ``coarse_cell_m``, ``portal_sector_blocks``)."""
+    timer: PhaseTimes | None = field(default=None, repr=False, compare=False)
+    """Where a benchmark's timing hooks record the decision's phases (candidates, distances, assignment,
+    routes); None: not timed."""
     _portals: dict[tuple[int, int, int], PortalGraph] = field(
         default_factory=dict, init=False, repr=False, compare=False
     )
@@ -226,9 +230,10 @@ class ExplorationPipeline:
                     computed.append(list(far.fields(passable, robots_rc, own_rc=own, own_needed=needed)))
             return computed[0]
 
-        cand = self.candidates(
-            CandidateQuery(state, frontiers, inp.blacklist, robots_rc, fields_now, current, resolution_m, far)
-        )
+        with timed(self.timer, "candidates"):
+            cand = self.candidates(
+                CandidateQuery(state, frontiers, inp.blacklist, robots_rc, fields_now, current, resolution_m, far)
+            )
         clusters = cand.clusters
         n = len(robots_rc)
         if cand.ended is not None:
@@ -238,20 +243,21 @@ class ExplorationPipeline:
         own = goals if self.commitment < 1 else []  # a robot's own goal is read for hysteresis only
         stop = self.stop_searches and own_planner and far is None and not computed
         reads = self.own_reads(robots_rc, cand, resolution_m) if stop else None
-        if computed:  # the strategy's candidates asked for them
-            fields = computed[0]
-        elif reads is not None:
-            # Each robot's own cells, its nearest centre (ties too) and its goal are all the planner and the
-            # paths read.
-            mine = [np.vstack([r, *own[i : i + 1]]) for i, r in enumerate(reads)]
-            fields = list(nearest_fields(passable, robots_rc, clusters.centers_rc, mine, box=box))
-        elif far is None:
-            # Every cell a field is read at from here on: centres, members (routes and goals), robots,
-            # current goals. Each search stops once it has them all.
-            targets = np.vstack([clusters.centers_rc, clusters.members_rc, robots_rc, *goals])
-            fields = list(distance_fields(passable, robots_rc, targets, box=box))
-        else:
-            fields = list(far.fields(passable, robots_rc, clusters.centers_rc, own))
+        with timed(self.timer, "distances"):
+            if computed:  # the strategy's candidates asked for them
+                fields = computed[0]
+            elif reads is not None:
+                # Each robot's own cells, its nearest centre (ties too) and its goal are all the planner and the
+                # paths read.
+                mine = [np.vstack([r, *own[i : i + 1]]) for i, r in enumerate(reads)]
+                fields = list(nearest_fields(passable, robots_rc, clusters.centers_rc, mine, box=box))
+            elif far is None:
+                # Every cell a field is read at from here on: centres, members (routes and goals), robots,
+                # current goals. Each search stops once it has them all.
+                targets = np.vstack([clusters.centers_rc, clusters.members_rc, robots_rc, *goals])
+                fields = list(distance_fields(passable, robots_rc, targets, box=box))
+            else:
+                fields = list(far.fields(passable, robots_rc, clusters.centers_rc, own))
         dist = np.stack([distances_at(f, clusters.centers_rc) for f in fields])
         kept = self._committed(clusters, fields, current, dist) if current is not None and self.commitment < 1 else {}
         if not np.isfinite(dist).any():
@@ -306,7 +312,8 @@ class ExplorationPipeline:
             raise MrExploreError("assign() needs a posed decision with a problem; an ended one is already final")
         owners = posed.work.candidates.owners if posed.work.candidates is not None else None
         if owners is None:
-            return self.planner.assign(posed.problem)
+            with timed(self.timer, "assignment"):
+                return self.planner.assign(posed.problem)
         out = np.full(posed.problem.n_robots, UNASSIGNED, dtype=np.int64)
         out[owners] = np.arange(len(owners))
         return Assignment(out)
@@ -324,7 +331,9 @@ class ExplorationPipeline:
         # Each robot's route is its own search (the distance kernels release the GIL): on the threads where
         # the map is large enough for its searches to outweigh handing them over.
         items = [(i, int(k)) for i, k in enumerate(assignment.cluster_of_robot)]
-        routes = map_threads(route, items) if w.passable.size >= _THREADED_ROUTES_CELLS else [route(x) for x in items]
+        with timed(self.timer, "routes"):
+            threaded = w.passable.size >= _THREADED_ROUTES_CELLS
+            routes = map_threads(route, items) if threaded else [route(x) for x in items]
         return _decision(p.state, w.frontiers, p.clusters, assignment, routes, w.fields, w.passable, p.robots_rc)
 
     def decide(self, inp: DecisionInput) -> Decision:

@@ -1,7 +1,7 @@
 """Exploration under faults: one bench per fault setting on the same maps, seeds and starts, and a table of
 steps and coverage against the fault-free run (paired differences with bootstrap intervals).
 
-    python perf/fault_table.py --out docs/results/faults
+    python benchmarks/fault_table.py --out docs/results/faults
 
 Each setting is an ordinary ``mrexplore bench`` run into its own folder (resumable); the table goes to
 OUT/README.md.
@@ -14,14 +14,14 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from _common import run_script, skip
 
 from mrexplore.bench.report import paired_bootstrap
 from mrexplore.bench.runner import read_rows
 from mrexplore.cli import main as cli
-from mrexplore.cli import run_script
+from mrexplore.example_maps import maps_dir
 
-ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared" / "maps"
+SHARED = maps_dir()
 SETTINGS = {
     "none": [],
     "robot 1 lost at step 100": ["--robot-failure", "1@100"],
@@ -46,7 +46,7 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=0)
     args = ap.parse_args()
     if not SHARED.is_dir():
-        sys.exit(f"shared maps not found at {SHARED}")
+        return skip("the example maps", SHARED)
     out = Path(args.out)
     common = ["--maps", *_maps(), "--strategies", args.strategies, "--robots", "3", "--seeds", str(args.seeds)]
     common += ["--resolution", "0.1", "--max-steps", "6000", "--workers", str(args.workers), "--no-progress"]
@@ -58,7 +58,8 @@ def main() -> None:
     lines = [
         "# Exploration under faults",
         "",
-        f"Made by: `python perf/fault_table.py --out {args.out} --seeds {args.seeds} --strategies {args.strategies}`",
+        f"Made by: `python benchmarks/fault_table.py --out {args.out} --seeds {args.seeds} "
+        f"--strategies {args.strategies}`",
         f"({len(_maps())} dev maps: 10 HouseExpo, 5 DungeonMaps; 3 robots; 0.1 m; seeds 0..{args.seeds - 1}; the",
         "same starts in every setting). Steps: mean over episodes; Δ: paired difference against no fault in % of",
         "its mean steps (positive: more steps), with a 95% bootstrap interval; coverage: the lowest of any",

@@ -1,12 +1,12 @@
 """Time of the distance fields a decision computes: whole fields from random free cells of a floor.
 
-    python perf/bench_fields.py --map ../shared/maps/kth_floorplans/50010535_PLAN1.yaml --sources 16
+    python benchmarks/fields.py --map ../shared/maps/kth_floorplans/50010535_PLAN1.yaml --sources 16
 
 Prints the grid, and the wall time of ``distance_fields`` from ``--sources`` cells drawn from the free
 cells (seed 0), once per repeat, on the shared threads: late in a mission, when the known floor is as
 large as the map, this is what each decision pays for its fields.
 
-    python perf/bench_fields.py --map ../shared/maps/houseexpo/png/76d71987631686644bcebcbad31c9a50.png \
+    python benchmarks/fields.py --map ../shared/maps/houseexpo/png/76d71987631686644bcebcbad31c9a50.png \
         --pairwise 12 --sources 30 --repeats 60
 
 With ``--pairwise BOX_M``: the local layer's distances between ``--sources`` candidates drawn in a box of
@@ -21,9 +21,9 @@ import sys
 import time
 
 import numpy as np
+from _common import run_script
 
 from mrexplore.boxes import cells_of
-from mrexplore.cli import run_script
 from mrexplore.config import MapConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.paths.distance_field import distance_fields, pairwise_distances

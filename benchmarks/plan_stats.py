@@ -1,6 +1,6 @@
 """Layout statistics of map sets: how the procedural training plans compare with the dev HouseExpo plans.
 
-Run: python perf/plan_stats.py [--plans 200] [--resolution 0.1] [--sets houseexpo generated varied] [--png PATH]
+Run: python benchmarks/plan_stats.py [--plans 200] [--resolution 0.1] [--sets houseexpo generated varied] [--png PATH]
 (--png: also draw the first 18 plans of the last procedural set named.)
 For each set it prints the 10th / 50th / 90th percentiles over its maps of:
 - ``box m2``: the bounding box of the explorable free space, m²;
@@ -22,17 +22,18 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from _common import run_script
 from scipy import ndimage
 
 from mrexplore.bench.runner import expand_maps
-from mrexplore.cli import run_script
 from mrexplore.config import MapConfig
+from mrexplore.example_maps import maps_dir
 from mrexplore.maps.ground_truth import explorable_region
 from mrexplore.maps.loaders import load_map
 from mrexplore.sim.starts import draw_starts
 from mrexplore.types import MrExploreError
 
-HOUSEEXPO = Path(__file__).resolve().parents[2] / "shared" / "maps" / "houseexpo"
+HOUSEEXPO = maps_dir() / "houseexpo"
 ROOM_CLEARANCE_M = 0.55
 SETS = ("houseexpo", "generated", "varied")
 STATS = ("box m2", "free m2", "fill", "rooms", "room m2", "clear m", "wall m/m2")

@@ -1,7 +1,7 @@
 """Learned global layer speed: policy inference per decision, and a whole decision of learned hier against
 utility and hier-heuristic on the largest HouseExpo map.
 
-Run: python perf/bench_policy.py [--robots 8] [--clusters 60] [--steps 300]
+Run: python benchmarks/policy_inference.py [--robots 8] [--clusters 60] [--steps 300]
 Targets on the 2-core dev machine: inference <= 5 ms per decision at 8 robots and 60 clusters; a decision
 of learned hier at 8 robots no slower than 1.2x utility's.
 """
@@ -13,8 +13,8 @@ import sys
 import time
 
 import numpy as np
+from _common import houseexpo_dir, largest_houseexpo, run_script
 
-from mrexplore.cli import run_script
 from mrexplore.config import MissionConfig, SimConfig
 from mrexplore.global_planning.learned.checkpoint import load_policy
 from mrexplore.global_planning.learned.policy import LearnedPlanner
@@ -23,9 +23,6 @@ from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import make_strategy
 from mrexplore.preprocessing.clustering import Clusters
-
-sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-from bench_step_and_decision import HOUSEEXPO, largest_houseexpo  # noqa: E402
 
 
 def inference_ms(robots: int, clusters: int, repeats: int = 200) -> tuple[float, float]:
@@ -74,8 +71,8 @@ def main() -> int:
     inference_ms(2, 5, 20)  # warm up torch
     med, p95 = inference_ms(args.robots, args.clusters)
     print(f"policy inference, {args.robots} robots x {args.clusters} clusters: {med:.2f} ms median, {p95:.2f} ms p95")
-    if not HOUSEEXPO.is_dir():
-        print(f"skipped the decision timings: HouseExpo maps not found at {HOUSEEXPO}", file=sys.stderr)
+    if not houseexpo_dir().is_dir():
+        print(f"skipped the decision timings: HouseExpo maps not found at {houseexpo_dir()}", file=sys.stderr)
         return 0
     decision_ms("utility", 2, 20)  # compile the numba kernels outside the timings
     print(f"decision on {largest_houseexpo().stem}, {args.robots} robots, first {args.steps} steps (median ms):")

@@ -1,6 +1,6 @@
 """Encode, decode and reconstruct times of sparse frontier maps, and how much the paper's fill loses.
 
-Run: python perf/bench_transmission.py [--every 25] [--map PATH]
+Run: python benchmarks/transmission.py [--every 25] [--map PATH]
 Target on the 2-core dev machine: encode + decode + reconstruct <= 10 ms per robot per round on the
 largest HouseExpo map. A hier mission with 3 robots is replayed; every ``--every`` steps each robot's
 closed grid is encoded, decoded and rebuilt, timed, and compared with the paper's reconstruction
@@ -16,10 +16,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-from bench_step_and_decision import HOUSEEXPO, largest_houseexpo
+from _common import houseexpo_dir, largest_houseexpo, run_script
 from scipy import ndimage
 
-from mrexplore.cli import run_script
 from mrexplore.config import MissionConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import run_mission
@@ -45,8 +44,8 @@ def main() -> int:
     ap.add_argument("--map", type=Path, default=None, help="map file (default: the largest HouseExpo map)")
     ap.add_argument("--max-steps", type=int, default=20000, help="step budget of the replayed mission")
     args = ap.parse_args()
-    if args.map is None and not HOUSEEXPO.is_dir():
-        print(f"skipped: HouseExpo maps not found at {HOUSEEXPO}", file=sys.stderr)
+    if args.map is None and not houseexpo_dir().is_dir():
+        print(f"skipped: HouseExpo maps not found at {houseexpo_dir()}", file=sys.stderr)
         return 0
     path = args.map or largest_houseexpo()
     truth = load_map(path)

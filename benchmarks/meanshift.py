@@ -1,7 +1,7 @@
 """Mean-Shift on real frontiers: the package's ``mean_shift`` against scikit-learn's ``MeanShift``.
 
-Run: python perf/bench_meanshift.py [--map PATH] [--robots 8] [--steps 300] [--repeats 3]
-     python perf/bench_meanshift.py --map ../shared/maps/kth_floorplans/50010535_PLAN1.yaml --from-coverage 0.6
+Run: python benchmarks/meanshift.py [--map PATH] [--robots 8] [--steps 300] [--repeats 3]
+     python benchmarks/meanshift.py --map ../shared/maps/kth_floorplans/50010535_PLAN1.yaml --from-coverage 0.6
 
 The F_un cells of every decision of one mission (``utility``, 0.05 m, the largest HouseExpo map by default)
 are clustered with the bandwidth rule of layer 1 (its bound included) by both implementations; the modes
@@ -20,18 +20,15 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from _common import largest_houseexpo, run_script
 from sklearn.cluster import MeanShift
 
-from mrexplore.cli import run_script
 from mrexplore.config import MapConfig, MissionConfig, PreprocessConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import make_strategy
 from mrexplore.preprocessing.clustering import bin_seeds, bounded_bandwidth, mean_shift
 from mrexplore.preprocessing.frontiers import detect_frontiers
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_step_and_decision import largest_houseexpo  # noqa: E402
 
 
 def main() -> int:

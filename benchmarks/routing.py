@@ -1,6 +1,6 @@
 """Median milliseconds of the local routing search (paper IV-C) for 30 candidates, and how often it is optimal.
 
-Run: python perf/bench_routing.py [--candidates 30] [--instances 200] [--optimality 2000]
+Run: python benchmarks/routing.py [--candidates 30] [--instances 200] [--optimality 2000]
 Target on the 2-core dev machine: <= 5 ms median for 30 candidates.
 Instances: candidates uniform in a 20 m square, gains 2-60 members, Euclidean distances.
 --optimality N: on N instances of 2-7 candidates, the share where the reversal search reaches the
@@ -15,8 +15,8 @@ import sys
 import time
 
 import numpy as np
+from _common import run_script
 
-from mrexplore.cli import run_script
 from mrexplore.config import LocalPlanningConfig
 from mrexplore.local_planning.routing import RouteProblem, reversal_search
 

@@ -1,6 +1,6 @@
 """How a centre decision's time grows with the map's cells and the team's size: a log-log plot and slopes.
 
-Run: python perf/bench_scaling.py [--map KTH.yaml] [--resolutions 0.4 0.2 0.1 0.05 0.035]
+Run: python benchmarks/scaling.py [--map KTH.yaml] [--resolutions 0.4 0.2 0.1 0.05 0.035]
                                   [--robots 2 4 8 16] [--steps 300] [--out docs/results/scaling]
 
 One KTH floor (default 50010535_PLAN1, 10,141 m² of interior) at several cell sizes gives maps of about
@@ -20,13 +20,11 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from _common import run_script, time_mission
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_step_and_decision import bench  # noqa: E402
+from mrexplore.example_maps import maps_dir
 
-from mrexplore.cli import run_script  # noqa: E402
-
-KTH = Path(__file__).resolve().parents[2] / "shared" / "maps" / "kth_floorplans"
+KTH = maps_dir() / "kth_floorplans"
 
 
 def slope(x: list[float], y: list[float]) -> float:
@@ -85,13 +83,13 @@ def main() -> int:
     if not args.map.exists():
         print(f"skipped: map not found at {args.map} (the KTH floors live in ../shared/maps)", file=sys.stderr)
         return 0
-    bench(args.map, 2, 20, "utility", 0.2)  # compile the numba kernels outside the timings
+    time_mission(args.map, 2, 20, "utility", 0.2)  # compile the numba kernels outside the timings
     args.out.mkdir(parents=True, exist_ok=True)
     rows: list[dict[str, float]] = []
     print("resolution m  cells      robots  coverage  decision ms (median / p95)")
     for res in args.resolutions:
         for n in args.robots:
-            r = bench(args.map, n, args.steps, "utility", res)
+            r = time_mission(args.map, n, args.steps, "utility", res)
             rows.append({"resolution_m": res, "robots": n, **r})
             print(
                 f"{res:12g}  {r['cells']:9d}  {n:6d}  {r['coverage']:8.3f}"

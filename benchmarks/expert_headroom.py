@@ -1,8 +1,8 @@
 """Headroom of the lookahead expert: whole episodes where it takes every decision, against hier-heuristic on
 the same maps, seeds and starts (paired), per dataset.
 
-Run: python perf/expert_headroom.py [--maps 6] [--robots 3] [--seeds 1] [--workers 2] [--datasets houseexpo,dungeon]
-                                    [--world truth|known]
+Run: python benchmarks/expert_headroom.py [--maps 6] [--robots 3] [--seeds 1] [--workers 2]
+         [--datasets houseexpo,dungeon] [--world truth|known]
 It picks the first ``--maps`` maps by name of each dev dataset (HouseExpo PNGs, DungeonMaps) at 0.1 m. The
 expert may use the simulator (training only): at each decision it runs its candidates (the heuristic's,
 nearest's and noisy utility assignments) forward over the training horizon and takes the best return.
@@ -19,20 +19,20 @@ import argparse
 import multiprocessing
 import sys
 from concurrent.futures import ProcessPoolExecutor
-from pathlib import Path
 
 import numpy as np
+from _common import run_script
 
 from mrexplore.bench.report import paired_bootstrap
-from mrexplore.cli import run_script
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig, TrainConfig
+from mrexplore.example_maps import maps_dir
 from mrexplore.global_planning.protocol import Assignment
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import make_strategy
 from mrexplore.training.expert import candidate_assignments, known_world_returns, lookahead_returns
 
-MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
+MAPS = maps_dir()
 
 
 def episode(args: tuple[str, int, int, bool, str]) -> int:

@@ -1,0 +1,31 @@
+"""Where the example maps are (the dev maps, the training maps): one setting that the CLI, the tests and the
+benchmarks read, the ``MREXPLORE_MAPS`` environment variable, or ``--maps-dir`` on the command line."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+__all__ = ["MAPS_ENV", "DEFAULT_MAPS_DIR", "maps_dir"]
+
+MAPS_ENV = "MREXPLORE_MAPS"
+"""The environment variable naming the example maps' folder."""
+DEFAULT_MAPS_DIR = Path("..") / "shared" / "maps"
+"""Where the example maps are when nothing says otherwise: beside a clone of the repository."""
+
+
+def maps_dir() -> Path:
+    """The example maps' folder: ``$MREXPLORE_MAPS``, else ``../shared/maps`` (from the working directory).
+
+    Examples
+    --------
+    >>> import os
+    >>> os.environ[MAPS_ENV] = "/data/maps"
+    >>> str(maps_dir())
+    '/data/maps'
+    >>> del os.environ[MAPS_ENV]
+    >>> maps_dir() == DEFAULT_MAPS_DIR
+    True
+    """
+    given = os.environ.get(MAPS_ENV)
+    return Path(given) if given else DEFAULT_MAPS_DIR
