@@ -15,7 +15,7 @@ from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.paths.astar import astar_path
 from mrexplore.paths.distance_field import distance_field
-from mrexplore.pipeline import make_strategy, strategy_names
+from mrexplore.pipeline import DecisionInput, make_strategy, strategy_names
 from mrexplore.types import CellState
 
 TEAMS = (1, 2, 3, 5, 8)
@@ -103,9 +103,10 @@ def test_a_robot_returning_to_goals_it_gave_up_commits_to_its_goal() -> None:
     decide = strategy.decide
     calls = [0]
 
-    def flipping(state, robots_rc, resolution_m, blacklist=None, current=None, rng=None, frontiers=None):
+    def flipping(inp: DecisionInput):
         """Each decision sends the robot to the frontier at the end it is not heading for."""
-        d = decide(state, robots_rc, resolution_m, blacklist, current, rng, frontiers)
+        d = decide(inp)
+        robots_rc = inp.robots_rc
         if d.done_reason is not None:
             return d
         calls[0] += 1

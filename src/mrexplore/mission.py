@@ -187,7 +187,7 @@ class Mission:
     """One exploration mission that can be stepped decision by decision.
 
     The one replanning loop of the package: :func:`run_mission`, the trainer's rollouts, the lookahead
-    expert and ``perf/`` all drive this object. :meth:`advance` runs simulation steps until the team needs
+    expert and the benchmarks all drive this object. :meth:`advance` runs simulation steps until the team needs
     a decision (True) or the mission ends (False); the decision is then taken whole by :meth:`decide`,
     or in two halves, :meth:`pose` (the centre's problem) and :meth:`commit` (any assignment), which is
     how a learned planner is trained.

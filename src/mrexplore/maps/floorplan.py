@@ -3,7 +3,7 @@ and the training feed.
 
 ``generated:SEED`` is the built-in map: a 16 x 12 m building cut into rooms of 2.5-6 m. ``varied:SEED`` draws
 the building's size, outline, room sizes, corridor, doors and clutter from the seed as well
-(:meth:`FloorplanSpec.varied`), so that training plans spread like HouseExpo's (``perf/plan_stats.py``
+(:meth:`FloorplanSpec.varied`), so that training plans spread like HouseExpo's (``benchmarks/plan_stats.py``
 compares them)."""
 
 from __future__ import annotations

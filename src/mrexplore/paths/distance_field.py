@@ -248,11 +248,9 @@ def nearest_fields(
 
 
 _PAIRWISE_SPLIT = 12
-"""Points from which :func:`pairwise_distances` shares its rows among the threads: 30 candidates in 12 m
-boxes of the largest HouseExpo map at 0.05 m took 6.6 ms on two threads against 11.9 on one, 12 took 2.2
-against 3.8 (``perf/bench_fields.py --pairwise 12``); the fewer candidates of the routes of an 8-robot
-mission there took longer split from 4 points on (3.4 ms a decision against 2.8,
-``perf/decision_split.py --strategy hier``)."""
+"""Points from which :func:`pairwise_distances` shares its rows among the threads: from about a dozen
+candidates two threads pay off, while the few candidates of most routes lose more to handing rows over
+than they gain (``benchmarks/fields.py --pairwise 12``)."""
 
 
 def pairwise_distances(passable: BoolGrid, points_rc: NDArray[np.integer]) -> NDArray[np.float64]:

@@ -87,9 +87,8 @@ def _tails(
 def _pool(passable: np.ndarray, r0: int, r1: int, c0: int, c1: int, f: int) -> np.ndarray:  # pragma: no cover
     """``(h, w) bool``: block ``(i, j)`` of rows ``r0 + i f ...`` and columns ``c0 + j f ...`` of ``passable``
     is True when every one of its cells inside ``[r0, r1) x [c0, c1)`` is, and the block lies wholly
-    inside (a block cut by the box's far edge is not passable). One pass over the box: numpy's reduction
-    over the two block axes of a reshaped copy took 12 ms a decision late on a KTH floor at 0.05 m
-    (``perf/decision_split.py``), this 3."""
+    inside (a block cut by the box's far edge is not passable). One pass over the box, a few times faster
+    than numpy's reduction over the two block axes of a reshaped copy."""
     h, w = -(-(r1 - r0) // f), -(-(c1 - c0) // f)
     out = np.ones((h, w), dtype=np.bool_)
     for i in range(h):
@@ -391,10 +390,9 @@ def _back(
     part reaches, then exactly to the cell: a real path, as every estimate is (distances are symmetric);
     ``inf`` where there is none.
 
-    A near/far field of the cell's own, read at the sources, went the same ways the other way round, with
-    a coarse search of its own: late on a KTH floor at 0.05 m, two such fields a decision (cluster centres
-    in ragged, ray-lit free space that no block next to them reaches) were a fifth of the decision's
-    coarse searches (``perf/replay_far_fields.py``)."""
+    A near/far field of the cell's own, read at the sources, would go the same ways the other way round,
+    with a coarse search of its own, which late on a large floor (cluster centres in ragged, ray-lit free
+    space that no block next to them reaches) adds a fifth to a decision's coarse searches."""
     seeds = _seeds(passable, grid, cell, radius)
     out = np.full(len(sources), np.inf)
     if len(seeds.blocks):
@@ -533,10 +531,9 @@ def far_fields(
         src: NDArray[np.int64], cells: NDArray[np.int64], keep: NearFarField | None = None
     ) -> NDArray[np.float64]:
         """Distances from ``src`` at ``cells`` the grid leaves at ``inf``: a near/far field of ``src`` on
-        blocks half as wide (:meth:`CoarseGrid.finer`), exact where that leaves them too. Recorded late
-        PLAN2 calls at 0.05 m, each of which searched the floor exactly from one centre, went 173/141 ->
-        114/94 ms on one thread, the distances so found at most 0.3% longer (``perf/replay_far_fields.py``,
-        docs/results/finer_blocks). ``keep``: the source's own field, which keeps the finer one for paths."""
+        blocks half as wide (:meth:`CoarseGrid.finer`), exact where that leaves them too: much cheaper than
+        searching the floor exactly from the source, the distances so found a fraction of a percent longer
+        (docs/performance.md). ``keep``: the source's own field, which keeps the finer one for paths."""
         if not finer:
             finer.append(pooled.finer() if pooled.fine is passable else _finer_of(passable, pooled.factor))
         out = np.full(len(cells), np.inf)
@@ -582,9 +579,7 @@ def far_fields(
             still = ~np.isfinite(d) & ~searched
             if still.any():
                 # Ragged free space round the cell joins no block of theirs within the radius. Twice the
-                # radius mostly does, at a fraction of an exact search over the floor: recorded late PLAN2
-                # calls went 142/118 -> 93/77 ms on one thread (``perf/replay_far_fields.py``,
-                # docs/results/back_wider).
+                # radius mostly does, at a fraction of an exact search over the floor.
                 d[still] = _back(passable, grid, cell, 2 * radius_cells, sources, fields)[still]
                 still &= ~np.isfinite(d)
             if still.any():

@@ -47,8 +47,8 @@ ANY = np.uint8(2)
 
 BLOCKED = np.float32(-1.0)
 """What a blocked cell holds during a search: ``nd < best[v]`` is then false for it, so one array
-answers both "passable?" and "improved?" (one memory stream instead of two: 1.4x faster on a large
-floor, ``perf/bench_fields.py``)."""
+answers both "passable?" and "improved?" (one memory stream instead of two: faster on a large floor,
+``benchmarks/fields.py``)."""
 
 
 @nb.njit(cache=True, nogil=True)

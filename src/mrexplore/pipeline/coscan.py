@@ -133,8 +133,8 @@ class CoScanPipeline(ExplorationPipeline):
         rows: TaskRows
         if q.far is None:
             # The whole matrix, made symmetric by the smaller of each pair's two float32 sums. Searching only
-            # the rows Lloyd reads (about half) was tried: the rows then differ in the last place, and 27 of
-            # 42 KTH missions parted, 2.8% [0.3, 6.5] more steps (docs/speed.md, "CoScan-2D's searches").
+            # the rows Lloyd reads (about half) makes rows differ in the last place and missions part, with
+            # more steps (docs/performance.md).
             d_tasks = distance_matrix(passable, tasks, tasks)
             d_tasks = np.minimum(d_tasks, d_tasks.T)  # equal up to float rounding; keep it symmetric
             rows = matrix_rows(d_tasks)

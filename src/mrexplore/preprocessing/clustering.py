@@ -336,8 +336,8 @@ def bin_seeds(points: NDArray[np.float64], bin_size: float) -> NDArray[np.floati
     binned = np.round(points / bin_size)
     if binned.ndim == 2 and binned.shape[1] == 2 and len(binned):
         # Each bin as one integer (row-major over the occupied span): a 1-D unique instead of numpy's
-        # row-wise one, which sorts structured rows (2.64 ms of a 7.10 ms Mean-Shift of 4,854 frontier cells
-        # late on a KTH floor at 0.05 m, ``perf/bench_meanshift.py --from-coverage``); first occurrences either way.
+        # row-wise one, which sorts structured rows (a third of a Mean-Shift of thousands of frontier cells,
+        # ``benchmarks/meanshift.py --from-coverage``); first occurrences either way.
         cells = binned.astype(np.int64)
         low = cells.min(axis=0)
         span = int(cells[:, 1].max() - low[1]) + 1

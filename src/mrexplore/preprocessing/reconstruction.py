@@ -199,7 +199,7 @@ _ALL = (-1, -1, -1, -1)
 class CentreMap:
     """The centre's memory of every robot's last map; takes full maps and deltas, gives the merged grid.
 
-    The merged grid is kept between rounds and redone only where the robots' maps changed (issue 13: the
+    The merged grid is kept between rounds and redone only where the robots' maps changed (the
     centre's work follows what changed, not the map). A delta changes a robot's codes in a box; its free
     space can then differ only in that box grown by one cell, so its fill is redone there alone, seeded
     from its free space just outside, and the merge and the closing are redone round that box.

@@ -152,9 +152,8 @@ class LearnedPlanner:
     def __post_init__(self) -> None:
         # torch runs on one intra-op thread in a process that holds a learned planner. The network's tensors
         # are too small to gain from threads, and its OpenMP workers spin after every call, taking the cores
-        # from the distance-field threads of the same decision and from other processes: with two threads,
-        # two bench workers made a decision 9x slower (187 ms against 21), and inference at 8 robots x 60
-        # clusters took 7.7 ms median (69 p95) beside a training run against 3.2 (7.9) with one.
+        # from the distance-field threads of the same decision and from other processes (with two threads,
+        # two bench workers made a decision several times slower).
         if torch.get_num_threads() != 1:
             torch.set_num_threads(1)
 
