@@ -196,16 +196,7 @@ def train(
     rng = np.random.default_rng(seed)
     stages = stages_of(cfg)
     if resume:
-        blob = torch.load(state_path, weights_only=True)
-        if blob["config"] != config_to_dict(cfg) or blob.get("env", env) != env:
-            raise MrExploreError(
-                f"{out} was trained with another config; resume with the same --config, or a new --out"
-            )
-        net.load_state_dict(blob["net"])
-        opt.load_state_dict(blob["opt"])
-        st = TrainState(**blob["state"])
-        data = _labels_from_blob(blob["data"])
-        rng.bit_generator.state = blob["rng"]
+        st, data = _restore(state_path, cfg, env, net, opt, rng)
         done = f"{st.episodes} episodes, {st.elapsed_s / 60:.1f} min so far"
         say(f"resuming {out} at stage {st.stage} of {len(stages)} ({done})")
     train_maps, val_maps = split_maps(train_dir, cfg.val_maps, cfg.plans)
@@ -262,6 +253,7 @@ def train(
                 row["val_sampled_steps_mean"], row["val_sampled_coverage_mean"] = steps_s, cov_s
                 if cfg.ncm.select == "sampled":
                     chosen_by, cov_key = "val_sampled_steps_mean", "val_sampled_coverage_mean"
+            # keep the best: fewest validation steps (or the best score), at no less coverage than the yardstick
             if stage.yardstick or (row[chosen_by] < st.best_val and row[cov_key] >= st.stage_rows[0][cov_key] - 0.005):
                 st.best_val, st.best_stage = row[chosen_by], stage.name
                 meta = {k: row[k] for k in row if k.startswith("val_")}
@@ -281,18 +273,11 @@ def train(
             )
             log.row(row, st.stage)
             say(f"{stage.name}: validation {_validation_text(row)} ({elapsed:.0f} s)")
-            # checkpoint: everything a resume needs, written atomically
+            # checkpoint
             st.stage += 1
             st.elapsed_s = time.perf_counter() - t_start
             st.log_rows = log.rows
-            blob = {
-                "config": config_to_dict(cfg), "env": env, "net": net.state_dict(), "opt": opt.state_dict(),
-                "state": st.__dict__, "data": _labels_to_blob(data), "rng": rng.bit_generator.state,
-                "code_version": code_version(),
-            }  # fmt: skip
-            tmp = state_path.with_name("state.pt.tmp")
-            torch.save(blob, tmp)
-            tmp.replace(state_path)
+            _checkpoint(state_path, cfg, env, net, opt, st, data, rng)
             bar.update()
     bar.close()
     shutil.copyfile(out / "best.pt", out / "policy.pt")
@@ -302,6 +287,47 @@ def train(
         w.writeheader()
         w.writerows(st.stage_rows)
     return TrainResult(out / "policy.pt", st.best_stage, st.stage_rows)
+
+
+def _checkpoint(
+    path: Path,
+    cfg: TrainConfig,
+    env: dict[str, Any],
+    net: torch.nn.Module,
+    opt: torch.optim.Optimizer,
+    st: TrainState,
+    data: Sequence[ExpertLabel],
+    rng: np.random.Generator,
+) -> None:
+    """Everything a resume needs, written atomically."""
+    blob = {
+        "config": config_to_dict(cfg), "env": env, "net": net.state_dict(), "opt": opt.state_dict(),
+        "state": st.__dict__, "data": _labels_to_blob(data), "rng": rng.bit_generator.state,
+        "code_version": code_version(),
+    }  # fmt: skip
+    tmp = path.with_name("state.pt.tmp")
+    torch.save(blob, tmp)
+    tmp.replace(path)
+
+
+def _restore(
+    path: Path,
+    cfg: TrainConfig,
+    env: dict[str, Any],
+    net: torch.nn.Module,
+    opt: torch.optim.Optimizer,
+    rng: np.random.Generator,
+) -> tuple[TrainState, list[ExpertLabel]]:
+    """Loads the run saved at ``path`` into ``net``, ``opt`` and ``rng``; its state and expert labels."""
+    blob = torch.load(path, weights_only=True)
+    if blob["config"] != config_to_dict(cfg) or blob.get("env", env) != env:
+        raise MrExploreError(
+            f"{path.parent} was trained with another config; resume with the same --config, or a new --out"
+        )
+    net.load_state_dict(blob["net"])
+    opt.load_state_dict(blob["opt"])
+    rng.bit_generator.state = blob["rng"]
+    return TrainState(**blob["state"]), _labels_from_blob(blob["data"])
 
 
 def _validation_text(row: dict[str, Any]) -> str:
