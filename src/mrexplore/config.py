@@ -14,7 +14,7 @@ import types
 import typing
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Literal
 
 from mrexplore.types import MrExploreError
 
@@ -535,7 +535,7 @@ class MissionConfig(_Checked):
     passed since the last one (the robot drives on meanwhile), steps (1: at once). A robot left with
     no path, or a blocked one, is served at once. Replanning at once makes teams chase goals that vanish as
     they come into view."""
-    transmission: str = "delta"
+    transmission: Literal["delta", "full"] = "delta"
     """What the centre rebuilds its grid from: ``delta`` (changes since the last acknowledged sparse
     frontier map) or ``full`` (the whole sparse map every round, the paper's). Same grid, fewer bytes."""
     baseline_bytes: bool = True

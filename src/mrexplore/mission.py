@@ -240,7 +240,7 @@ class Mission:
             truth.shape,
             strategy.preprocess,
             sim_cfg.sensor,
-            mission_cfg.transmission,  # type: ignore[arg-type]
+            mission_cfg.transmission,
             faults.message_loss,
             np.random.default_rng([spec.seed, _LINK_STREAM]),
             faults.silence_rounds,
