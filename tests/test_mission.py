@@ -394,3 +394,14 @@ def test_specks_dropped_sparsely_as_on_the_whole_grid(seed: int, min_size: int, 
     expected &= np.bincount(labels.ravel())[labels] >= min_size
     got = denoised_frontier_cells(Frontiers(un, np.zeros_like(un)), blacklist, min_size)
     assert got.tolist() == np.argwhere(expected).tolist()
+
+
+def test_the_fault_schedule_hands_out_each_fault_once_in_step_order() -> None:
+    from mrexplore.config import FaultConfig
+    from mrexplore.mission import FaultSchedule
+
+    schedule = FaultSchedule(FaultConfig(robot_failures=((2, 30), (0, 10)), centre_restarts=(40, 20, 20)), 3)
+    assert schedule.failures_due(9) == [] and schedule.failures_due(35) == [0, 2] and schedule.failures_due(99) == []
+    assert schedule.restarts_due(19) == 0 and schedule.restarts_due(20) == 2 and schedule.restarts_due(40) == 1
+    with pytest.raises(MrExploreError, match=r"^robot failure names robot 3, but the team has robots 0\.\.2; "):
+        FaultSchedule(FaultConfig(robot_failures=((3, 5),)), 3)
