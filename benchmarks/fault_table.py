@@ -1,10 +1,10 @@
 """Exploration under faults: one bench per fault setting on the same maps, seeds and starts, and a table of
 steps and coverage against the fault-free run (paired differences with bootstrap intervals).
 
-    python benchmarks/fault_table.py --out docs/results/faults
+    python benchmarks/fault_table.py --out runs/faults
 
 Each setting is an ordinary ``mrexplore bench`` run into its own folder (resumable); the table goes to
-OUT/README.md.
+OUT/report.md.
 """
 
 from __future__ import annotations
@@ -38,9 +38,9 @@ def _maps() -> list[str]:
     return [str(p) for p in [*hx, *dungeon]]
 
 
-def main() -> None:
+def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default="docs/results/faults")
+    ap.add_argument("--out", default="runs/faults")
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--strategies", default="hier,utility")
     ap.add_argument("--workers", type=int, default=0)
@@ -82,8 +82,9 @@ def main() -> None:
                 f"| {np.mean([int(r['messages_lost']) for r in rows]):.1f} "
                 f"| {np.mean([int(r['messages_resent']) for r in rows]):.1f} |"
             )
-    (out / "README.md").write_text("\n".join(lines) + "\n")
+    (out / "report.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
+    return 0
 
 
 def _pct(x: float) -> str:

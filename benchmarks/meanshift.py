@@ -46,7 +46,7 @@ def main() -> int:
     mission = Mission(
         MissionSpec(truth, make_strategy("utility"), SimConfig(robots=args.robots), budget, 0), progress=False
     )
-    sets = []
+    sets: list[np.ndarray] = []
     while (not late or len(sets) < args.sets) and mission.advance():
         mission.decide()
         if late and mission.record.curve[-1] < args.from_coverage:

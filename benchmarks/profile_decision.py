@@ -47,7 +47,7 @@ def profile(args: argparse.Namespace, cfg: RunConfig) -> dict:
     first = len(m.record.plan_ms)
     pipeline.timer = times = PhaseTimes()
     profiler = cProfile.Profile() if args.cprofile else None
-    coverage = []
+    coverage: list[float] = []
     while (args.decisions is None or len(coverage) < args.decisions) and m.advance():
         if profiler is not None:
             profiler.enable()

@@ -21,7 +21,7 @@ from scipy import ndimage
 
 from mrexplore.config import MissionConfig
 from mrexplore.maps.loaders import load_map
-from mrexplore.mission import run_mission
+from mrexplore.mission import MissionSpec, run_mission
 from mrexplore.pipeline import make_strategy
 from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
 from mrexplore.preprocessing.reconstruction import fill_paper, free_iou, reconstruct
@@ -83,8 +83,9 @@ def main() -> int:
             iou_exact.append(free_iou(rebuilt == CellState.FREE, free))
             iou_paper.append(free_iou(paper, free))
 
-    run_mission(load_map("generated:0"), strategy, seed=0)  # compile the numba kernels outside the timings
-    result = run_mission(truth, strategy, seed=0, observer=observe, mission_cfg=MissionConfig(max_steps=args.max_steps))
+    run_mission(MissionSpec(load_map("generated:0"), strategy))  # compile the numba kernels outside the timings
+    spec = MissionSpec(truth, strategy, mission_cfg=MissionConfig(max_steps=args.max_steps))
+    result = run_mission(spec, observer=observe)
     total = np.add(np.add(times["encode"], times["decode"]), times["reconstruct"])
     print(f"map {path.stem} ({truth.shape[0]}x{truth.shape[1]} cells), hier, 3 robots, {len(total)} robot-rounds")
     print(f"mission: {result.measures.steps} steps, coverage {result.measures.coverage:.5f}")
