@@ -20,6 +20,7 @@ from mrexplore.types import MrExploreError
 
 __all__ = [
     "MapConfig",
+    "GridThresholds",
     "SensorConfig",
     "MotionConfig",
     "SimConfig",
@@ -242,6 +243,25 @@ class MapConfig(_Checked):
         "max_cells": _at_least(1),
         "max_image_pixels": _at_least(1),
         "max_file_bytes": _at_least(1),
+    }
+
+
+@dataclass(frozen=True)
+class GridThresholds(_Checked):
+    """How a robot's published occupancy grid (ROS values: -1 unknown, 0-100 occupied %) becomes cell states
+    (map_server's defaults, 0.196 and 0.65), and how large a grid is read at all."""
+
+    free_max: int = 19
+    """Values from 0 up to this are free."""
+    occupied_min: int = 65
+    """Values from this up to 100 are occupied; between the two, and -1, unknown."""
+    max_cells: int = 60_000_000
+    """A grid with more cells is refused before anything is allocated for it."""
+
+    _constraints = {
+        "free_max": Interval(0, 99),
+        "occupied_min": Interval("free_max", 100, "right"),
+        "max_cells": _at_least(1),
     }
 
 

@@ -1,0 +1,147 @@
+"""A robot's occupancy grid as ROS publishes it (nav_msgs/OccupancyGrid: -1 unknown, 0-100 occupied %),
+checked and read into the team's grid: the robot's map frame placed in the team frame by a known offset
+(the paper's known initial relative poses), each team cell taking the state of the robot's cell under its
+centre. Plain data in, plain data out: no ROS here (the ROS 2 adapter fills :class:`OccupancyGridData`).
+
+Examples
+--------
+>>> msg = OccupancyGridData(width=3, height=2, resolution_m=1.0, origin_xyyaw=(0.0, 0.0, 0.0),
+...                         data=(0, 0, 100, -1, 0, 0))
+>>> from mrexplore.config import GridThresholds
+>>> team = GridFrame(height=2, width=3, resolution_m=1.0)
+>>> state_in_team_frame(msg, FrameOffset(), team, GridThresholds()).tolist()  # row 0 is the top (y = 1)
+[[2, 0, 0], [0, 0, 1]]
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mrexplore.config import GridThresholds
+from mrexplore.maps.frame import GridFrame
+from mrexplore.types import CellState, MrExploreError, StateGrid
+
+__all__ = ["OccupancyGridData", "FrameOffset", "checked_values", "state_in_team_frame"]
+
+
+@dataclass(frozen=True)
+class OccupancyGridData:
+    """The fields of a nav_msgs/OccupancyGrid that place and fill it."""
+
+    width: int
+    """Cells along x."""
+    height: int
+    """Cells along y."""
+    resolution_m: float
+    """Cell size, metres."""
+    origin_xyyaw: tuple[float, float, float]
+    """Pose of the corner of cell (0, 0) in the robot's map frame: x, y in metres, yaw in radians."""
+    data: Sequence[int] | NDArray[np.integer]
+    """``width * height`` values, row-major from cell (0, 0) (rows along +y): -1 unknown, 0-100 occupied %."""
+
+
+@dataclass(frozen=True)
+class FrameOffset:
+    """Where a robot's map frame lies in the team frame: its origin at ``(x_m, y_m)``, turned by ``yaw_rad``
+    (all zero: the robots share one frame, a merged map)."""
+
+    x_m: float = 0.0
+    y_m: float = 0.0
+    yaw_rad: float = 0.0
+
+
+def checked_values(msg: OccupancyGridData, thresholds: GridThresholds) -> NDArray[np.int8]:
+    """``(height, width) int8`` the message's values, rows along +y; a malformed message raises one
+    :class:`MrExploreError` line naming what is wrong.
+
+    Examples
+    --------
+    >>> from mrexplore.config import GridThresholds
+    >>> bad = OccupancyGridData(2, 2, float("nan"), (0.0, 0.0, 0.0), (0, 0, 0, 0))
+    >>> checked_values(bad, GridThresholds())
+    Traceback (most recent call last):
+    ...
+    mrexplore.types.MrExploreError: occupancy grid resolution must be a finite number > 0 metres, got nan
+    """
+    w, h, res = msg.width, msg.height, msg.resolution_m
+    if not (isinstance(res, float | int) and math.isfinite(res) and res > 0):
+        raise MrExploreError(f"occupancy grid resolution must be a finite number > 0 metres, got {res!r}")
+    if not all(isinstance(v, float | int) and math.isfinite(v) for v in msg.origin_xyyaw):
+        raise MrExploreError(f"occupancy grid origin must be finite x, y and yaw, got {msg.origin_xyyaw!r}")
+    if w < 1 or h < 1 or w * h > thresholds.max_cells:
+        raise MrExploreError(
+            f"occupancy grid of {w} x {h} cells is empty or larger than {thresholds.max_cells:,} cells; "
+            "publish a map of the area explored"
+        )
+    values = np.asarray(msg.data)
+    if values.ndim != 1 or len(values) != w * h:
+        raise MrExploreError(f"occupancy grid data holds {values.size} values for {w} x {h} = {w * h} cells")
+    if len(values) and (int(values.min()) < -1 or int(values.max()) > 100):
+        raise MrExploreError(
+            f"occupancy grid values must be -1 (unknown) or 0-100, got {int(values.min())} to {int(values.max())}"
+        )
+    return values.astype(np.int8).reshape(h, w)
+
+
+def state_in_team_frame(
+    msg: OccupancyGridData, offset: FrameOffset, team: GridFrame, thresholds: GridThresholds
+) -> StateGrid:
+    """``(team.height, team.width) uint8`` the robot's grid in the team's grid: each team cell takes the
+    state of the robot's cell under its centre (unknown where none is).
+
+    Placing is nearest-cell: cells of equal size and aligned frames map one to one; a turned frame or
+    another cell size samples the robot's grid at the team cells' centres.
+    """
+    values = checked_values(msg, thresholds)
+    states = np.full(values.shape, CellState.UNKNOWN, dtype=np.uint8)
+    states[(values >= 0) & (values <= thresholds.free_max)] = CellState.FREE
+    states[values >= thresholds.occupied_min] = CellState.OCCUPIED
+    out = np.full((team.height, team.width), CellState.UNKNOWN, dtype=np.uint8)
+    # The robot grid's cell (i along y, j along x) of each team cell's centre: team frame -> robot map frame
+    # (undo the offset) -> grid frame (undo the grid origin's pose).
+    ox, oy, oyaw = msg.origin_xyyaw
+    rows, cols = _team_cells_near(msg, offset, team)
+    if len(rows) == 0:
+        return out
+    x_t = team.origin_xy[0] + (cols + 0.5) * team.resolution_m
+    y_t = team.origin_xy[1] + (team.height - 1 - rows + 0.5) * team.resolution_m
+    x_m, y_m = _rotate(x_t - offset.x_m, y_t - offset.y_m, -offset.yaw_rad)
+    x_g, y_g = _rotate(x_m - ox, y_m - oy, -oyaw)
+    j = np.floor(x_g / msg.resolution_m).astype(np.int64)
+    i = np.floor(y_g / msg.resolution_m).astype(np.int64)
+    inside = (i >= 0) & (i < msg.height) & (j >= 0) & (j < msg.width)
+    out[rows[inside], cols[inside]] = states[i[inside], j[inside]]
+    return out
+
+
+def _rotate(x: NDArray[np.floating], y: NDArray[np.floating], yaw: float) -> tuple[NDArray[np.floating], ...]:
+    """Points turned by ``yaw`` radians about the origin."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    return c * x - s * y, s * x + c * y
+
+
+def _team_cells_near(
+    msg: OccupancyGridData, offset: FrameOffset, team: GridFrame
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Row and column indices of the team cells inside the bounding box of the robot's grid placed in the
+    team frame (only they can take a state from it)."""
+    ox, oy, oyaw = msg.origin_xyyaw
+    w_m, h_m = msg.width * msg.resolution_m, msg.height * msg.resolution_m
+    corners = np.array([[0.0, 0.0], [w_m, 0.0], [0.0, h_m], [w_m, h_m]])
+    x_m, y_m = _rotate(corners[:, 0], corners[:, 1], oyaw)
+    x_t, y_t = _rotate(x_m + ox, y_m + oy, offset.yaw_rad)
+    x_t, y_t = x_t + offset.x_m, y_t + offset.y_m
+    res = team.resolution_m
+    c0 = max(0, math.floor((x_t.min() - team.origin_xy[0]) / res))
+    c1 = min(team.width, math.ceil((x_t.max() - team.origin_xy[0]) / res))
+    r0 = max(0, team.height - math.ceil((y_t.max() - team.origin_xy[1]) / res))
+    r1 = min(team.height, team.height - math.floor((y_t.min() - team.origin_xy[1]) / res))
+    if c1 <= c0 or r1 <= r0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    rr, cc = np.mgrid[r0:r1, c0:c1]
+    return rr.ravel().astype(np.int64), cc.ravel().astype(np.int64)

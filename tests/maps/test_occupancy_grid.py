@@ -1,0 +1,85 @@
+"""A robot's occupancy grid (ROS values) read into the team's grid: thresholds, placement by a frame offset,
+and each malformed message refused in one line."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mrexplore.config import GridThresholds
+from mrexplore.maps.frame import GridFrame
+from mrexplore.maps.occupancy_grid import FrameOffset, OccupancyGridData, checked_values, state_in_team_frame
+from mrexplore.types import MrExploreError
+
+F, X, U = 0, 1, 2  # CellState: free, occupied (X), unknown
+TH = GridThresholds()
+
+
+def _msg(rows_up: list[list[int]], res: float = 1.0, origin=(0.0, 0.0, 0.0)) -> OccupancyGridData:
+    """A message from its rows, the first row at the origin (y = 0), as ROS orders them."""
+    return OccupancyGridData(len(rows_up[0]), len(rows_up), res, origin, [v for row in rows_up for v in row])
+
+
+def test_values_become_states_by_the_map_server_thresholds() -> None:
+    msg = _msg([[-1, 0, 19, 20, 64, 65, 100]])
+    team = GridFrame(height=1, width=7, resolution_m=1.0)
+    assert state_in_team_frame(msg, FrameOffset(), team, TH).tolist() == [[U, F, F, U, U, X, X]]
+
+
+def test_the_first_row_of_the_message_is_the_bottom_row_of_the_grid() -> None:
+    msg = _msg([[0, 0, 100], [-1, 0, 0]])
+    team = GridFrame(height=2, width=3, resolution_m=1.0)
+    assert state_in_team_frame(msg, FrameOffset(), team, TH).tolist() == [[U, F, F], [F, F, X]]
+
+
+def test_an_offset_moves_the_robot_map_in_the_team_frame() -> None:
+    msg = _msg([[0, 100]])  # free at x in [0, 1), occupied at x in [1, 2)
+    team = GridFrame(height=2, width=4, resolution_m=1.0)
+    moved = state_in_team_frame(msg, FrameOffset(x_m=2.0, y_m=1.0), team, TH)
+    assert moved.tolist() == [[U, U, F, X], [U, U, U, U]]
+    # turned a quarter left about the robot's origin: +x of the robot map is +y of the team
+    turned = state_in_team_frame(msg, FrameOffset(x_m=1.0, yaw_rad=math.pi / 2), team, TH)
+    assert turned.tolist() == [[X, U, U, U], [F, U, U, U]]
+
+
+def test_the_grid_origin_pose_and_a_finer_team_grid_are_honoured() -> None:
+    msg = _msg([[0, 100]], res=1.0, origin=(-1.0, 0.0, 0.0))  # free at x in [-1, 0), occupied in [0, 1)
+    team = GridFrame(height=1, width=4, resolution_m=0.5, origin_xy=(-1.0, 0.0))
+    assert state_in_team_frame(msg, FrameOffset(), team, TH).tolist() == [[F, F, X, X]]
+
+
+def test_a_map_outside_the_team_grid_leaves_it_unknown() -> None:
+    team = GridFrame(height=2, width=2, resolution_m=1.0)
+    out = state_in_team_frame(_msg([[0]]), FrameOffset(x_m=10.0), team, TH)
+    assert (out == U).all()
+
+
+ZERO = (0.0, 0.0, 0.0)
+RES = "occupancy grid resolution must be a finite number > 0 metres, got"
+ORIGIN = "occupancy grid origin must be finite x, y and yaw, got"
+SIZE = "cells is empty or larger than 60,000,000 cells; publish a map of the area explored"
+BAD = [
+    (OccupancyGridData(3, 2, 1.0, ZERO, [0] * 5), "occupancy grid data holds 5 values for 3 x 2 = 6 cells"),
+    (OccupancyGridData(1, 1, float("nan"), ZERO, [0]), f"{RES} nan"),
+    (OccupancyGridData(1, 1, float("inf"), ZERO, [0]), f"{RES} inf"),
+    (OccupancyGridData(1, 1, 0.0, ZERO, [0]), f"{RES} 0.0"),
+    (OccupancyGridData(100_000, 100_000, 0.05, ZERO, []), f"occupancy grid of 100000 x 100000 {SIZE}"),
+    (OccupancyGridData(0, 4, 0.05, ZERO, []), f"occupancy grid of 0 x 4 {SIZE}"),
+    (OccupancyGridData(1, 1, 1.0, (math.nan, 0.0, 0.0), [0]), f"{ORIGIN} (nan, 0.0, 0.0)"),
+    (OccupancyGridData(2, 1, 1.0, ZERO, [0, 101]), "occupancy grid values must be -1 (unknown) or 0-100, got 0 to 101"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("msg", "message"), BAD)
+def test_a_malformed_message_is_refused_in_one_line(msg: OccupancyGridData, message: str) -> None:
+    with pytest.raises(MrExploreError) as err:
+        checked_values(msg, TH)
+    assert str(err.value) == message
+
+
+def test_thresholds_must_leave_a_gap_between_free_and_occupied() -> None:
+    with pytest.raises(MrExploreError, match=r"^occupied_min must be in \(free_max \(70\), 100\], got 65$"):
+        GridThresholds(free_max=70, occupied_min=65)
+    assert checked_values(_msg([[5, -1]]), TH).dtype == np.int8
