@@ -246,3 +246,37 @@ def test_pieces_kept_where_only_the_robots_piece_changes(monkeypatch: MonkeyPatc
     assert fills == ["plain", "plain", "labelled"]
     belief.log_odds[2, 8:11] = -2.0  # a way from B to C, seen
     assert see(2, 3, 8, 11) == [2 * 15 + 2] and fills[-1] == "labelled"  # one piece again
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10**6), st.sampled_from([1, 3]))
+def test_a_grid_fed_states_equals_one_fed_the_beliefs_they_come_from(seed: int, size: int) -> None:
+    # A real robot's map arrives as states (its published occupancy grid), not as log-odds: the same states
+    # give the same closing, codes, cells and message seeds as the beliefs they classify.
+    rng = np.random.default_rng(seed)
+    shape = (int(rng.integers(6, 30)), int(rng.integers(6, 30)))
+    truth = rng.random(shape) < 0.25
+    belief = Belief.empty(shape)
+    by_belief, by_state = OnBoardGrid(shape, size, SENSOR), OnBoardGrid(shape, size, SENSOR)
+    for _ in range(5):
+        for _ in range(int(rng.integers(1, 3))):
+            _scan(belief, truth, rng)
+        by_belief.update(belief)
+        changed = by_state.update_state(classify(belief.log_odds, belief.observed, SENSOR))
+        for name in ("state", "closed", "codes", "cells"):
+            assert np.array_equal(getattr(by_state, name), getattr(by_belief, name)), name
+        assert by_state.n_free == by_belief.n_free
+        robot = (shape[0] // 2, shape[1] // 2)
+        window = (slice(0, shape[0]), slice(0, shape[1]))
+        assert np.array_equal(by_state.seeds(robot, window), by_belief.seeds(robot, window))
+        assert by_state.update_state(by_state.state.copy()) is None  # nothing new, nothing to redo
+        assert changed is None or changed[0] < changed[1]
+
+
+def test_a_state_grid_of_another_shape_is_refused() -> None:
+    import pytest
+
+    from mrexplore.types import MrExploreError
+
+    with pytest.raises(MrExploreError, match=r"^the robot's grid must be \(4, 4\) cells, got \(4, 5\)$"):
+        OnBoardGrid((4, 4), 1, SENSOR).update_state(np.zeros((4, 5), np.uint8))

@@ -15,7 +15,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import Box, box_union, grown_slices
+from mrexplore.boxes import Box, box_union, grown_slices, mask_box
 from mrexplore.config import SensorConfig
 from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
 from mrexplore.preprocessing.scanline_fill import (
@@ -27,7 +27,7 @@ from mrexplore.preprocessing.scanline_fill import (
 )
 from mrexplore.preprocessing.sparse_map import neighbour_codes
 from mrexplore.sim.belief import Belief, classify
-from mrexplore.types import CellState, GridRC, StateGrid
+from mrexplore.types import CellState, GridRC, MrExploreError, StateGrid
 
 __all__ = ["OnBoardGrid"]
 
@@ -89,9 +89,36 @@ class OnBoardGrid:
         self._belief, self._revision = belief, belief.revision
         if changed is None:
             return None
-        shape = self.state.shape
         rows, cols = _slices(changed)
         own = classify(belief.log_odds[rows, cols], belief.observed[rows, cols], self.sensor)
+        return self._apply(changed, own, free_count)
+
+    def update_state(self, state: StateGrid) -> Box | None:
+        """Bring the grids in line with a three-state grid of the robot's own (``(H, W) uint8``, e.g. its
+        published occupancy grid read by :mod:`~mrexplore.maps.occupancy_grid`): as :meth:`update`, over
+        the box of the cells that changed. A grid is fed one way: by beliefs (the simulator's robots) or by
+        states (a real robot's map), not both.
+
+        Examples
+        --------
+        >>> g = OnBoardGrid((4, 4), closing_size_cells=1, sensor=SensorConfig())
+        >>> s = np.full((4, 4), CellState.UNKNOWN, np.uint8); s[1:3, 1:3] = CellState.FREE
+        >>> g.update_state(s), g.update_state(s), g.n_free
+        ((0, 4, 0, 4), None, 4)
+        """
+        if state.shape != self.state.shape:
+            raise MrExploreError(f"the robot's grid must be {self.state.shape} cells, got {state.shape}")
+        changed = mask_box(state != self.state)
+        if changed is None:
+            return None
+        rows, cols = _slices(changed)
+        return self._apply(changed, state[rows, cols].copy())
+
+    def _apply(self, changed: Box, own: StateGrid, free_count: NDArray[np.uint16] | None = None) -> Box:
+        """Set :attr:`state` to ``own`` in ``changed`` and redo the closing and the codes within their
+        reach; the box where they may have changed."""
+        shape = self.state.shape
+        rows, cols = _slices(changed)
         if free_count is not None:
             was = self.state[rows, cols] == CellState.FREE
             now = own == CellState.FREE
