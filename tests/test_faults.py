@@ -11,9 +11,9 @@ from mrexplore.global_planning.protocol import UNASSIGNED
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec, run_mission
 from mrexplore.pipeline import make_strategy, strategy_names
+from mrexplore.preprocessing.link import TeamLink
 from mrexplore.preprocessing.reconstruction import CentreMap
 from mrexplore.preprocessing.sparse_map import sparse_frontier_map
-from mrexplore.preprocessing.transmission import TeamLink
 from mrexplore.sim.belief import Belief
 from mrexplore.types import CellState, MrExploreError
 

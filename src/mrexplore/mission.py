@@ -40,7 +40,8 @@ from mrexplore.paths.astar import astar_path
 from mrexplore.paths.distance_field import descend_path, distance_fields, distances_at
 from mrexplore.pipeline import NO_GOAL, NO_ROUTE, Decision, DecisionInput, ExplorationPipeline, PosedDecision
 from mrexplore.preprocessing.frontiers import close_unknown_holes, detect_frontiers
-from mrexplore.preprocessing.transmission import LinkStatus, TeamLink
+from mrexplore.preprocessing.link import TeamLink
+from mrexplore.preprocessing.transmission import LinkStatus
 from mrexplore.sim.belief import classify
 from mrexplore.sim.measures import EpisodeMeasures, lower_bound_steps
 from mrexplore.sim.starts import draw_starts

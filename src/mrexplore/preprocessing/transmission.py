@@ -1,19 +1,16 @@
-"""One communication round between the robots and the centre, with the episode's byte accounting.
-
-Each round every robot closes its own grid, builds its sparse frontier map and encodes it twice: whole
-(the paper's message) and as a delta against the map the centre acknowledged last (RACER-style
-incremental sharing). The centre decodes the stream chosen by ``mode`` and rebuilds the team grid that
-every strategy plans on. For the same rounds the accounting counts what the paper's baseline would send,
-each robot's occupancy grid as int8 per cell over the bounding box of its known cells (a ROS
-OccupancyGrid's data), raw and zlib-compressed, and the free-space IoU of the centre's grid against the
-union of the robots' own beliefs.
+"""A robot's messages and the byte accounting of a round: the sparse frontier map built each round, whole
+(the paper's message) and as a delta against the map the centre acknowledged last (RACER-style incremental
+sharing), each encoded only when asked for (:class:`Outgoing`, :class:`RobotSender`); the episode's totals
+(:class:`TransmissionTotals`); what the paper's baseline would send, each robot's occupancy grid as int8 per
+cell over the bounding box of its known cells (a ROS OccupancyGrid's data), raw and zlib-compressed; and what
+the centre knows of its robots after a round (:class:`LinkStatus`). The link itself is
+:class:`~mrexplore.preprocessing.link.TeamLink`.
 """
 
 from __future__ import annotations
 
-import time
 import zlib
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from typing import Literal
 
@@ -22,11 +19,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrexplore.boxes import Box, box_union
-from mrexplore.config import PreprocessConfig, SensorConfig
-from mrexplore.preprocessing.frontiers import closing_reach
 from mrexplore.preprocessing.onboard import OnBoardGrid
-from mrexplore.preprocessing.reconstruction import CentreMap, free_iou
-from mrexplore.preprocessing.sparse_codec import HEADER, decode, encode
+from mrexplore.preprocessing.sparse_codec import HEADER, encode
 from mrexplore.preprocessing.sparse_map import (
     FULL,
     SparseFrontierMap,
@@ -35,12 +29,9 @@ from mrexplore.preprocessing.sparse_map import (
     coded_frontier_map,
     sparse_frontier_map,
 )
-from mrexplore.sim.belief import Belief
-from mrexplore.threads import map_threads
 from mrexplore.types import CellState, StateGrid
 
 __all__ = [
-    "TeamLink",
     "LinkStatus",
     "RobotSender",
     "Outgoing",
@@ -327,183 +318,3 @@ class LinkStatus:
     positions_rc: NDArray[np.int32]
     """``(n_robots, 2) int32`` each robot's cell in its last message that arrived ((-1, -1): none since
     the centre started)."""
-
-
-class TeamLink:
-    """The robots' senders and the centre's receiver for one episode, over a link that may lose messages.
-
-    Parameters
-    ----------
-    mode:
-        ``"delta"`` (default): the centre rebuilds from the incremental stream; ``"full"``: from whole
-        maps. Both give the same grid; bytes of both are counted either way.
-    message_loss:
-        Probability that a message is lost, each way (robot to centre, and the centre's acknowledgement
-        or request for a whole map back), drawn from ``rng``.
-    count_grids:
-        Count the int8-grid baselines of Table II too (False: their fields stay empty; nothing else
-        changes, and a round on a large floor costs much less).
-
-    The protocol under loss: a robot sends its delta against the last map the centre acknowledged to it.
-    A robot whose last message got no acknowledgement cannot tell a lost message (the centre holds its
-    base) from a lost acknowledgement (the centre is a round ahead), so it sends its whole map next. The
-    centre never applies a delta to a base it lacks: it asks for the whole map and the robot resends it at
-    once (the request and the resend may be lost too; then the robot tries again next round). That is how
-    a restarted centre, which holds no base at all, gets every robot's map back.
-    """
-
-    def __init__(
-        self,
-        n_robots: int,
-        shape: tuple[int, int],
-        preprocess: PreprocessConfig,
-        sensor: SensorConfig,
-        mode: TransmissionMode = "delta",
-        message_loss: float = 0.0,
-        rng: np.random.Generator | None = None,
-        silence_rounds: int = 3,
-        count_grids: bool = True,
-    ) -> None:
-        self.preprocess = preprocess
-        self.sensor = sensor
-        self.mode = mode
-        self.message_loss = message_loss
-        self.silence_rounds = silence_rounds
-        self._rng = rng if rng is not None else np.random.default_rng(0)
-        self.centre = CentreMap(n_robots, shape, preprocess.closing_size_cells)
-        self.totals = TransmissionTotals(grids_counted=count_grids)
-        self.senders = [RobotSender(i, shape) for i in range(n_robots)]
-        self._last_heard = np.full(n_robots, -1, dtype=np.int64)
-        self._positions = np.full((n_robots, 2), -1, dtype=np.int32)
-        self.status = LinkStatus(np.zeros(n_robots, bool), np.ones(n_robots, bool), self._positions.copy())
-        self.onboard = [OnBoardGrid(shape, preprocess.closing_size_cells, sensor) for _ in range(n_robots)]
-        """Each robot's own grid, closed and coded, kept up to date where its scans fell."""
-        self._free_count = np.zeros(shape, dtype=np.uint16)
-        """Per cell, how many robots' own grids hold it free (their union is what the IoU compares with)."""
-        self._grid_bytes: list[tuple[tuple[int, tuple[slice, slice]], tuple[int, int]] | None] = [None] * n_robots
-        """Each robot's last :func:`occupancy_grid_bytes`, by its grid's state version and window: a robot
-        whose grid did not change (driving through known space) would send the same grid again."""
-        self.robot_ms = 0.0
-        """Milliseconds the last round spent on the robots' side, all robots together: their grids' update,
-        closing, codes and messages, which run on board in a real team."""
-        self.robot_ms_each: list[float] = []
-        """Milliseconds of on-board work of each robot that sent a map in the last round."""
-        self.accounting_ms = 0.0
-        """Milliseconds the last round spent on the episode's accounting: what the baselines would have sent
-        (:class:`TransmissionTotals`) and the IoU; neither a robot nor the centre does this work."""
-
-    def restart_centre(self) -> None:
-        """The centre loses everything it held: the robots' maps and bases, their cells, whom it heard."""
-        n = len(self.senders)
-        self.centre = CentreMap(n, self.centre.shape, self.centre.closing_size_cells)
-        self._last_heard[:] = self.totals.rounds - 1
-        self._positions[:] = -1
-        self.totals.centre_restarts += 1
-
-    def _lost(self) -> bool:
-        return self.message_loss > 0 and bool(self._rng.random() < self.message_loss)
-
-    def _send(self, data: bytes) -> SparseFrontierMap | None:
-        """One message over the link: decoded at the centre, or None when lost."""
-        self.totals.messages_sent += 1
-        if self._lost():
-            self.totals.messages_lost += 1
-            self.totals.bytes_lost += len(data)
-            return None
-        return decode(data)
-
-    def _deliver(self, i: int, data: bytes, out: Outgoing) -> None:
-        """Robot i's message ``data`` of this round, with the whole-map request and resend when the centre
-        lacks the delta's base, and the acknowledgement back."""
-        received = self._send(data)
-        if received is None:
-            return
-        if not self.centre.accepts(received):
-            if self._lost():  # the centre's request for the whole map
-                self.totals.acks_lost += 1
-                return
-            full = out.full_bytes()
-            self.totals.messages_resent += 1
-            self.totals.bytes_resent += len(full)
-            received = self._send(full)
-            if received is None:
-                return
-        self.centre.receive(received)
-        self._last_heard[i] = self.totals.rounds
-        self._positions[i] = received.position_rc
-        if self._lost():
-            self.totals.acks_lost += 1
-        else:
-            self.senders[i].acknowledged(received)
-
-    def exchange(
-        self,
-        beliefs: Sequence[Belief],
-        positions_rc: NDArray[np.integer],
-        sending: NDArray[np.bool_] | None = None,
-    ) -> StateGrid:
-        """Run one round: every robot that can (``sending``, default all) sends, the centre rebuilds;
-        returns the centre's ``(H, W) uint8`` grid and updates :attr:`status`."""
-        r = self.totals.rounds
-        robot_s = accounting_s = 0.0
-        self.robot_ms_each = []
-        to_count: list[tuple[int, tuple[int, tuple[slice, slice]], StateGrid]] = []
-        counted: list[int] = []  # robots whose grid bytes are known, kept from an earlier round or not
-        sent: list[Outgoing] = []
-        # A robot's message covers the box of its observed cells, grown by the closing's reach plus one
-        # cell: the closing, the codes and the seeds there equal those of the whole grid (nothing beyond
-        # is free).
-        margin = closing_reach(self.preprocess.closing_size_cells) + 1
-        for i, belief in enumerate(beliefs):
-            t0 = time.perf_counter()
-            sender, grid = self.senders[i], self.onboard[i]
-            sender.note_changed(grid.update(belief, self._free_count))
-            if sending is not None and not sending[i]:
-                robot_s += time.perf_counter() - t0
-                continue
-            window = belief.window(margin)
-            pos = (int(positions_rc[i][0]), int(positions_rc[i][1]))
-            out = sender.send_onboard(grid, r, pos, window)
-            data = out.incremental() if self.mode == "delta" else out.full_bytes()
-            t1 = time.perf_counter()
-            if self.totals.grids_counted:
-                key = (grid.state_version, window)
-                cached = self._grid_bytes[i]
-                if cached is None or cached[0] != key:
-                    to_count.append((i, key, grid.state[window]))
-                else:
-                    counted.append(i)
-                self.totals.bytes_grid_delta_zlib += sender.onboard_grid_delta_bytes(grid)
-            sent.append(out)
-            t2 = time.perf_counter()
-            robot_s += t1 - t0
-            accounting_s += t2 - t1
-            self.robot_ms_each.append((t1 - t0) * 1e3)
-            self._deliver(i, data, out)
-        t0 = time.perf_counter()
-        # What the other transmission mode would have sent, and the baseline grids, encoded on the threads
-        # (zlib and the box's pass let go of the GIL): on a KTH floor the grids were a fifth of a whole
-        # mission's time on one thread.
-        for full_bytes, incremental in map_threads(Outgoing.both, sent):
-            self.totals.bytes_sparse += len(full_bytes)
-            self.totals.bytes_sparse_delta += len(incremental)
-        sizes = map_threads(lambda job: occupancy_grid_bytes(job[2]), to_count)
-        for (i, key, _), counts in zip(to_count, sizes, strict=True):
-            self._grid_bytes[i] = key, counts
-            counted.append(i)
-        for i in counted:
-            raw, packed = self._grid_bytes[i][1]  # type: ignore[index]
-            self.totals.bytes_grid += raw
-            self.totals.bytes_grid_zlib += packed
-        accounting_s += time.perf_counter() - t0
-        state = self.centre.state()
-        t0 = time.perf_counter()
-        self.totals.iou.append(free_iou(state == CellState.FREE, self._free_count > 0))
-        self.robot_ms = robot_s * 1e3
-        self.accounting_ms = (accounting_s + time.perf_counter() - t0) * 1e3
-        heard = self._last_heard == r
-        known = self._positions[:, 0] >= 0
-        assignable = (r - self._last_heard < self.silence_rounds) & known
-        self.status = LinkStatus(heard, assignable, self._positions.copy())
-        self.totals.rounds += 1
-        return state

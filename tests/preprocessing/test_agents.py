@@ -1,0 +1,63 @@
+"""The link's two ends as plain objects: a robot fed its own map as states, and the centre's receiving end,
+through the protocol's whole maps, deltas, acknowledgements and a restart."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mrexplore.config import PreprocessConfig, SensorConfig
+from mrexplore.preprocessing.agents import RobotAgent, TeamCentre
+from mrexplore.preprocessing.sparse_codec import decode
+from mrexplore.types import CellState
+
+SHAPE = (8, 10)
+PP = PreprocessConfig(closing_size_cells=1)
+
+
+def _room(c1: int) -> np.ndarray:
+    state = np.full(SHAPE, CellState.UNKNOWN, np.uint8)
+    state[2:6, 1:c1] = CellState.FREE
+    return state
+
+
+def test_whole_map_then_deltas_then_a_restart_asks_for_the_whole_map_again() -> None:
+    robot, centre = RobotAgent(0, SHAPE, PP, SensorConfig()), TeamCentre(1, SHAPE, 1, silence_rounds=3)
+    robot.sense_state(_room(4))
+    first = decode(robot.compose(0, (3, 2), robot.window()).incremental())
+    assert not first.is_delta and centre.accepts(first)
+    centre.receive(first, 0)
+    robot.acknowledged(first)
+    assert (centre.state() == CellState.FREE).sum() == 12  # the 4 x 3 room
+    robot.sense_state(_room(7))  # the room seen further east
+    second = decode(robot.compose(1, (3, 5), robot.window()).incremental())
+    assert second.is_delta and second.base_round == 0 and centre.accepts(second)
+    centre.receive(second, 1)
+    robot.acknowledged(second)
+    assert (centre.state() == CellState.FREE).sum() == 24 and centre.positions_rc.tolist() == [[3, 5]]
+    centre.restart(2)  # the centre forgets: a delta has no base there any more
+    robot.sense_state(_room(8))
+    out = robot.compose(2, (3, 6), robot.window())
+    third = decode(out.incremental())
+    assert third.is_delta and not centre.accepts(third)
+    whole = decode(out.full_bytes())  # what the robot resends on the centre's request
+    assert centre.accepts(whole)
+    centre.receive(whole, 2)
+    assert (centre.state() == CellState.FREE).sum() == 28
+
+
+def test_a_robot_is_assignable_while_heard_within_the_silence_limit() -> None:
+    robot, centre = RobotAgent(1, SHAPE, PP, SensorConfig()), TeamCentre(2, SHAPE, 1, silence_rounds=2)
+    robot.sense_state(_room(4))
+    centre.receive(decode(robot.compose(0, (3, 2), robot.window()).full_bytes()), 0)
+    assert centre.status(0).heard.tolist() == [False, True]
+    assert centre.status(0).assignable.tolist() == [False, True]  # robot 0: never heard, no known cell
+    assert centre.status(1).assignable.tolist() == [False, True] and not centre.status(1).heard.any()
+    assert centre.status(2).assignable.tolist() == [False, False]  # two rounds of silence
+
+
+def test_the_window_holds_every_known_cell_with_the_closing_margin() -> None:
+    robot = RobotAgent(0, SHAPE, PreprocessConfig(closing_size_cells=3), SensorConfig())
+    assert robot.window() == (slice(0, 8), slice(0, 10))  # nothing known: the whole grid
+    robot.sense_state(_room(4))
+    # rows 2-5, cols 1-3, grown by the closing's reach (3 cells for a 3 x 3 closing) plus one, and clipped
+    assert robot.window() == (slice(0, 8), slice(0, 8))
