@@ -163,16 +163,16 @@ def test_routes_on_threads_give_the_mission_inline_routes_give(small_map, monkey
 def test_baseline_bytes_counted_on_threads_equal_those_counted_inline(small_map, monkeypatch) -> None:
     # Table II's baseline grids are compressed on the threads where more than one is allowed: the byte
     # counts, and every other record but the timings, are those of one thread.
-    import mrexplore.preprocessing.transmission as transmission
+    import mrexplore.preprocessing.link as link
 
     batches: list[int] = []
-    plain = transmission.map_threads
+    plain = link.map_threads
 
     def spied(fn, items):
         batches.append(len(items))
         return plain(fn, items)
 
-    monkeypatch.setattr(transmission, "map_threads", spied)
+    monkeypatch.setattr(link, "map_threads", spied)
     runs = []
     for threads in ("1", "2"):
         monkeypatch.setenv("MREXPLORE_THREADS", threads)

@@ -26,7 +26,7 @@ from mrexplore.config import GridThresholds
 from mrexplore.maps.frame import GridFrame
 from mrexplore.types import CellState, MrExploreError, StateGrid
 
-__all__ = ["OccupancyGridData", "FrameOffset", "checked_values", "state_in_team_frame"]
+__all__ = ["OccupancyGridData", "FrameOffset", "checked_values", "state_in_team_frame", "occupancy_values", "yaw_of"]
 
 
 @dataclass(frozen=True)
@@ -145,3 +145,29 @@ def _team_cells_near(
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     rr, cc = np.mgrid[r0:r1, c0:c1]
     return rr.ravel().astype(np.int64), cc.ravel().astype(np.int64)
+
+
+_VALUES = np.array([0, 100, -1], dtype=np.int8)  # indexed by CellState: free, occupied, unknown
+
+
+def occupancy_values(state: StateGrid) -> NDArray[np.int8]:
+    """``(H * W,) int8`` a grid's cells as an OccupancyGrid's data: 0 free, 100 occupied, -1 unknown, row-major
+    from the bottom row (rows along +y), the inverse of :func:`state_in_team_frame` on the same grid.
+
+    Examples
+    --------
+    >>> occupancy_values(np.array([[2, 0], [0, 1]], np.uint8)).tolist()
+    [0, 100, -1, 0]
+    """
+    return _VALUES[state[::-1]].ravel()
+
+
+def yaw_of(qx: float, qy: float, qz: float, qw: float) -> float:
+    """The heading (rotation about z, radians) of a quaternion.
+
+    Examples
+    --------
+    >>> round(yaw_of(0.0, 0.0, math.sin(math.pi / 4), math.cos(math.pi / 4)), 6)
+    1.570796
+    """
+    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))

@@ -1,0 +1,66 @@
+"""Keep DDS on this machine: loopback-only discovery and transport, and a domain of the run's own.
+
+DDS finds its peers by multicast on every interface unless told otherwise. :func:`keep_on_loopback` sets,
+before rclpy is imported, ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``, a Fast DDS profile whose only
+transport is UDP on 127.0.0.1 (no shared-memory or multicast peers elsewhere), and a ``ROS_DOMAIN_ID``, so
+that concurrent runs never meet. The tests, the benchmarks and ``mrexplore ros2 launch`` call it; a real
+deployment leaves it out (``--network``) and configures DDS as its robots need.
+"""
+
+from __future__ import annotations
+
+import os
+import random
+import sys
+import tempfile
+from pathlib import Path
+
+from mrexplore.types import MrExploreError
+
+__all__ = ["keep_on_loopback", "LOOPBACK_PROFILE"]
+
+LOOPBACK_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
+<profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
+  <transport_descriptors>
+    <transport_descriptor>
+      <transport_id>loopback_udp</transport_id>
+      <type>UDPv4</type>
+      <interfaceWhiteList><address>127.0.0.1</address></interfaceWhiteList>
+    </transport_descriptor>
+  </transport_descriptors>
+  <participant profile_name="mrexplore_loopback" is_default_profile="true">
+    <rtps>
+      <userTransports><transport_id>loopback_udp</transport_id></userTransports>
+      <useBuiltinTransports>false</useBuiltinTransports>
+    </rtps>
+  </participant>
+</profiles>
+"""
+"""A Fast DDS profile whose one transport is UDP on 127.0.0.1."""
+
+
+def keep_on_loopback(domain_id: int | None = None) -> dict[str, str]:
+    """Set this process's (and its children's) environment so that ROS 2 traffic stays on loopback; returns
+    the variables set. ``domain_id``: None draws one in 1-101 (Linux's safe range), so that concurrent runs
+    do not meet; the variables pass to the processes a launch starts.
+
+    Must run before rclpy is imported: DDS reads them once, when the first participant starts.
+    """
+    if "rclpy" in sys.modules:
+        raise MrExploreError("keep_on_loopback() must run before rclpy is imported; call it first")
+    if domain_id is not None and not 0 <= domain_id <= 101:
+        raise MrExploreError(f"ROS domain id must be in [0, 101], got {domain_id}")
+    profile = Path(tempfile.gettempdir()) / "mrexplore_fastdds_loopback.xml"
+    if not profile.exists() or profile.read_text() != LOOPBACK_PROFILE:
+        tmp = profile.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(LOOPBACK_PROFILE)
+        tmp.replace(profile)
+    env = {
+        "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+        "RMW_IMPLEMENTATION": "rmw_fastrtps_cpp",
+        "FASTRTPS_DEFAULT_PROFILES_FILE": str(profile),
+        "FASTDDS_DEFAULT_PROFILES_FILE": str(profile),
+        "ROS_DOMAIN_ID": str(random.SystemRandom().randint(1, 101) if domain_id is None else domain_id),
+    }
+    os.environ.update(env)
+    return env
