@@ -4,15 +4,18 @@ bytes, the team map. The only module that knows the message types' fields."""
 from __future__ import annotations
 
 import array
+from typing import TYPE_CHECKING
 
 import numpy as np
-from geometry_msgs.msg import Pose
-from nav_msgs.msg import OccupancyGrid
-from std_msgs.msg import UInt8MultiArray
 
 from mrexplore.maps.frame import GridFrame
 from mrexplore.maps.occupancy_grid import OccupancyGridData, occupancy_values, yaw_of
 from mrexplore.types import StateGrid
+
+if TYPE_CHECKING:  # the message packages come with the ros2 extra; imported where a message is built
+    from geometry_msgs.msg import Pose
+    from nav_msgs.msg import OccupancyGrid
+    from std_msgs.msg import UInt8MultiArray
 
 __all__ = ["grid_data", "pose_xyyaw", "bytes_message", "message_bytes", "team_map_message"]
 
@@ -34,6 +37,8 @@ def pose_xyyaw(pose: Pose) -> tuple[float, float, float]:
 
 def bytes_message(data: bytes) -> UInt8MultiArray:
     """A std_msgs/UInt8MultiArray carrying ``data``."""
+    from std_msgs.msg import UInt8MultiArray
+
     msg = UInt8MultiArray()
     msg.data = data
     return msg
@@ -46,6 +51,8 @@ def message_bytes(msg: UInt8MultiArray) -> bytes:
 
 def team_map_message(state: StateGrid, frame: GridFrame, frame_id: str) -> OccupancyGrid:
     """The team's grid as a nav_msgs/OccupancyGrid in ``frame_id`` (the team frame)."""
+    from nav_msgs.msg import OccupancyGrid
+
     msg = OccupancyGrid()
     msg.header.frame_id = frame_id
     msg.info.width, msg.info.height = int(frame.width), int(frame.height)
