@@ -280,7 +280,78 @@ def build_parser() -> argparse.ArgumentParser:
         "config", help="print every setting with its default as a YAML file for --config", description=CONFIG_HEADER
     )
     _add_report(sub)
+    _add_ros2(sub)
     return parser
+
+
+def _floats(count: int, what: str) -> Any:
+    """An argparse type: ``count`` comma-separated finite numbers."""
+
+    def parse(text: str) -> tuple[float, ...]:
+        try:
+            values = tuple(float(v) for v in text.split(","))
+        except ValueError:
+            values = ()
+        if len(values) != count or not all(math.isfinite(v) for v in values):
+            raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}")
+        return values
+
+    return parse
+
+
+def _add_ros2(sub: Any) -> None:
+    rp = sub.add_parser("ros2", help="run the layers on ROS 2 robots (docs/ros2.md)")
+    kinds = rp.add_subparsers(dest="ros2", required=True, parser_class=_Parser)
+    ro = kinds.add_parser("robot", help="one robot's on-board work: its map -> sparse frontier messages")
+    ro.add_argument("--name", required=True, help="the robot's name (its topics: /NAME/map, /NAME/pose)")
+    ro.add_argument("--index", type=_SEED, required=True, help="the robot's index in the team, from 0")
+    ro.add_argument(
+        "--team-grid",
+        type=_floats(4, "X0,Y0,WIDTH,HEIGHT in metres"),
+        required=True,
+        metavar="X0,Y0,WIDTH,HEIGHT",
+        help="the team's grid in the team frame: its lower-left corner and size, metres",
+    )
+    ro.add_argument("--resolution", type=_POSITIVE, default=MapConfig.resolution_m, help="cell size, metres")
+    ro.add_argument(
+        "--offset",
+        type=_floats(3, "X,Y,YAW (metres, radians)"),
+        default=(0.0, 0.0, 0.0),
+        metavar="X,Y,YAW",
+        help="where the robot's map frame lies in the team frame (default 0,0,0: one shared frame)",
+    )
+    ro.add_argument("--pose-type", default="pose_with_covariance", help="pose_with_covariance (AMCL) or odometry")
+    ro.add_argument(
+        "--network",
+        action="store_true",
+        help="use the system's DDS settings (default: traffic kept on this machine's loopback)",
+    )
+    ro.add_argument(
+        "--config", default=None, metavar="FILE", help="YAML file of settings; the robot reads its preprocess section"
+    )
+
+
+def _ros2(args: argparse.Namespace) -> str:
+    from mrexplore.maps.frame import GridFrame
+    from mrexplore.maps.occupancy_grid import FrameOffset
+
+    run = read_config_file(args.config) if args.config else RunConfig()
+    x0, y0, width_m, height_m = args.team_grid
+    if width_m <= 0 or height_m <= 0:
+        raise MrExploreError(f"--team-grid must have a size > 0 metres, got {width_m} x {height_m}")
+    cells = math.ceil(width_m / args.resolution) * math.ceil(height_m / args.resolution)
+    if cells > run.map.max_cells:
+        raise MrExploreError(f"--team-grid holds {cells:,} cells at {args.resolution} m, more than map.max_cells")
+    team = GridFrame(
+        math.ceil(height_m / args.resolution), math.ceil(width_m / args.resolution), args.resolution, (x0, y0)
+    )
+    try:
+        from mrexplore.ros2.robot_node import RobotNodeSettings, run_robot_node
+    except ImportError:
+        raise MrExploreError("ROS 2 commands need rclpy; install it with: pip install -e '.[ros2]'") from None
+    settings = RobotNodeSettings(args.name, args.index, team, FrameOffset(*args.offset), args.pose_type, run.preprocess)
+    run_robot_node(settings, loopback=not args.network)
+    return f"robot {args.name} stopped"
 
 
 def _add_report(sub: Any) -> None:
@@ -630,6 +701,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"# {CONFIG_HEADER}\n" + config_yaml(RunConfig()), end="")
         elif args.command == "report":
             print(_report(args, argv))
+        elif args.command == "ros2":
+            print(_ros2(args), file=sys.stderr)
     except MrExploreError as exc:
         print(f"mrexplore: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

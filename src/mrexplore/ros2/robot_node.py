@@ -1,0 +1,170 @@
+"""``mrexplore ros2 robot``: one robot's on-board work as a ROS 2 node, a thin adapter around
+:class:`~mrexplore.preprocessing.agents.RobotAgent`.
+
+Topics (``NAME`` is the robot's name):
+
+- in: ``/NAME/map`` (nav_msgs/OccupancyGrid, transient local, as slam_toolbox and map_server publish it);
+  ``/NAME/pose`` (geometry_msgs/PoseWithCovarianceStamped, as AMCL and slam_toolbox publish it, or
+  nav_msgs/Odometry); ``/mrexplore/round`` (std_msgs/UInt32: the centre asks for round r's maps);
+  ``/mrexplore/NAME/reply`` (std_msgs/UInt32MultiArray ``[round, kind]``, kind :data:`ACK` or
+  :data:`WHOLE_MAP`).
+- out: ``/mrexplore/NAME/frontiers`` (std_msgs/UInt8MultiArray): the robot's sparse frontier map, a delta
+  against what the centre acknowledged or the whole map, in the team's grid.
+
+The protocol is the simulator's: the robot answers each round with its incremental message; the centre
+acknowledges it (later deltas apply to it) or, lacking the delta's base, asks for the whole map, which the
+robot sends at once. A malformed map or message is one warning line in the node's log and is dropped; the
+node keeps what it had.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from mrexplore.config import GridThresholds, PreprocessConfig, SensorConfig
+from mrexplore.maps.frame import GridFrame
+from mrexplore.maps.occupancy_grid import FrameOffset, state_in_team_frame
+from mrexplore.preprocessing.agents import RobotAgent
+from mrexplore.preprocessing.sparse_codec import decode
+from mrexplore.preprocessing.sparse_map import SparseFrontierMap
+from mrexplore.preprocessing.transmission import Outgoing
+from mrexplore.ros2.messages import bytes_message, grid_data, pose_xyyaw
+from mrexplore.types import MrExploreError
+
+__all__ = ["RobotNodeSettings", "RobotNode", "run_robot_node", "ACK", "WHOLE_MAP", "POSE_TYPES"]
+
+ACK = 0
+"""Reply kind: the centre holds the robot's message of that round."""
+WHOLE_MAP = 1
+"""Reply kind: the centre lacks the delta's base; send the whole map."""
+POSE_TYPES = ("pose_with_covariance", "odometry")
+
+
+@dataclass(frozen=True)
+class RobotNodeSettings:
+    """What one robot node needs: its name and index in the team, the team's grid, its frame's offset."""
+
+    name: str
+    index: int
+    """The robot's index in the team (its id in messages)."""
+    team: GridFrame
+    """The team's grid: cell size, size and origin in the team frame."""
+    offset: FrameOffset = FrameOffset()
+    pose_type: str = "pose_with_covariance"
+    preprocess: PreprocessConfig = PreprocessConfig()
+    thresholds: GridThresholds = GridThresholds()
+
+    def __post_init__(self) -> None:
+        if self.pose_type not in POSE_TYPES:
+            raise MrExploreError(f"pose type must be one of {', '.join(POSE_TYPES)}, got {self.pose_type!r}")
+
+
+class RobotNode:
+    """The robot's node: keeps its :class:`RobotAgent` fed with its map and pose, answers the centre's rounds."""
+
+    def __init__(self, node: Any, settings: RobotNodeSettings) -> None:
+        from geometry_msgs.msg import PoseWithCovarianceStamped
+        from nav_msgs.msg import OccupancyGrid, Odometry
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        from std_msgs.msg import UInt8MultiArray, UInt32, UInt32MultiArray
+
+        self.node, self.settings = node, settings
+        team = settings.team
+        self.agent = RobotAgent(settings.index, (team.height, team.width), settings.preprocess, SensorConfig())
+        self.position_rc: tuple[int, int] | None = None
+        self.has_map = False
+        self.maps_dropped = 0
+        self._sent: tuple[int, Outgoing, SparseFrontierMap] | None = None
+        """The round answered last, its messages and the one sent (what an acknowledgement confirms)."""
+        self._sent_bytes = b""
+        name = settings.name
+        latched = QoSProfile(
+            depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
+        )
+        node.create_subscription(OccupancyGrid, f"/{name}/map", self._on_map, latched)
+        pose_msg = PoseWithCovarianceStamped if settings.pose_type == "pose_with_covariance" else Odometry
+        node.create_subscription(pose_msg, f"/{name}/pose", self._on_pose, 10)
+        node.create_subscription(UInt32, "/mrexplore/round", self._on_round, 10)
+        node.create_subscription(UInt32MultiArray, f"/mrexplore/{name}/reply", self._on_reply, 10)
+        self._out = node.create_publisher(UInt8MultiArray, f"/mrexplore/{name}/frontiers", 10)
+
+    def _warn(self, text: str) -> None:
+        self.node.get_logger().warning(text)
+
+    def _on_map(self, msg: Any) -> None:
+        s = self.settings
+        try:
+            state = state_in_team_frame(grid_data(msg), s.offset, s.team, s.thresholds)
+        except MrExploreError as exc:
+            self.maps_dropped += 1
+            self._warn(f"map dropped: {exc}")
+            return
+        self.agent.sense_state(state)
+        self.has_map = True
+
+    def _on_pose(self, msg: Any) -> None:
+        x, y, _ = pose_xyyaw(msg.pose.pose)
+        o = self.settings.offset
+        c, s = math.cos(o.yaw_rad), math.sin(o.yaw_rad)
+        xy = (o.x_m + c * x - s * y, o.y_m + s * x + c * y)  # the robot's map frame -> the team frame
+        rc = self.settings.team.xy_to_rc(xy)
+        if not self.settings.team.contains(rc):
+            self._warn(f"pose dropped: ({xy[0]:.2f}, {xy[1]:.2f}) m lies outside the team's grid")
+            return
+        self.position_rc = rc
+
+    def _on_round(self, msg: Any) -> None:
+        if self.position_rc is None or not self.has_map:
+            return  # nothing to send before the robot's first map and pose
+        round_ = int(msg.data)
+        if self._sent is not None and self._sent[0] == round_:
+            self._out.publish(bytes_message(self._sent_bytes))  # asked again: the same answer
+            return
+        out = self.agent.compose(round_, self.position_rc, self.agent.window())
+        data = out.incremental()
+        self._sent, self._sent_bytes = (round_, out, decode(data)), data
+        self._out.publish(bytes_message(data))
+
+    def _on_reply(self, msg: Any) -> None:
+        values = list(msg.data)
+        if len(values) != 2 or self._sent is None or values[0] != self._sent[0]:
+            self._warn(f"reply dropped: {values} answers no message this robot sent")
+            return
+        round_, out, message = self._sent
+        if values[1] == ACK:
+            self.agent.acknowledged(message)
+        elif values[1] == WHOLE_MAP:
+            data = out.full_bytes()
+            self._sent, self._sent_bytes = (round_, out, decode(data)), data
+            self._out.publish(bytes_message(data))
+        else:
+            self._warn(f"reply dropped: kind {values[1]} is neither {ACK} (ack) nor {WHOLE_MAP} (whole map)")
+
+
+def run_robot_node(settings: RobotNodeSettings, loopback: bool = True) -> None:
+    """Start the robot's node and serve until interrupted (SIGINT or SIGTERM). ``loopback``: keep DDS on this
+    machine (:func:`~mrexplore.ros2.loopback.keep_on_loopback`, with the domain already set where it is)."""
+    import os
+
+    if loopback:
+        from mrexplore.ros2.loopback import keep_on_loopback
+
+        domain = os.environ.get("ROS_DOMAIN_ID")
+        keep_on_loopback(int(domain) if domain and domain.isdigit() else None)
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+
+    rclpy.init()
+    node = rclpy.create_node(f"mrexplore_{settings.name}")
+    RobotNode(node, settings)
+    node.get_logger().info(f"robot {settings.name} ready")
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        if rclpy.ok():
+            rclpy.shutdown()

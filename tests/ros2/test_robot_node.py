@@ -1,0 +1,36 @@
+"""``mrexplore ros2 robot`` in a process of its own, driven through the middleware on loopback by a test
+centre: whole map, delta, a refused delta after a centre restart and the whole map resent, and a malformed
+map dropped with one warning while the node keeps what it had."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.skipif(
+    importlib.util.find_spec("rclpy") is None,
+    reason="rclpy is not installed (pip install -e '.[ros2]'); CI installs it",
+)
+
+
+def test_the_robot_node_speaks_the_protocol_and_survives_a_bad_map() -> None:
+    script = Path(__file__).with_name("robot_session.py")
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=240)
+    assert out.returncode == 0, out.stderr[-2000:]
+    result = json.loads(out.stdout.strip().splitlines()[-1])
+    assert result["steps"] == [
+        ["whole", True],
+        ["delta", True],
+        ["refused", True],
+        ["resent", True],
+        ["after_bad_map", True],
+    ]
+    assert result["centre_equals_in_process"]  # the same map the objects give in one process
+    assert len(result["warnings"]) == 1
+    assert result["warnings"][0].endswith("map dropped: occupancy grid data holds 77 values for 10 x 8 = 80 cells")
+    assert result["robot_exit"] == 0  # ended by the test, cleanly
