@@ -114,8 +114,12 @@ def main() -> None:
         bad = team_map_message(room(8), TEAM, "map")
         bad.data = bad.data[:-3]  # data length not width x height
         map_pub.publish(bad)
+        lost = PoseWithCovarianceStamped()
+        lost.pose.pose.position.x = float("nan")
+        lost.pose.pose.orientation.w = 1.0
+        pose_pub.publish(lost)
         spin(0.5)
-        fourth = decode(ask(3, room(6)))  # the bad map dropped: the robot still holds room(6)
+        fourth = decode(ask(3, room(6)))  # the bad map and pose dropped: the robot still holds room(6)
         kinds.append(("after_bad_map", fourth.is_delta and centre.accepts(fourth)))
         centre.receive(fourth, 3)
         result["steps"] = kinds

@@ -1,6 +1,6 @@
 """``mrexplore ros2 robot`` in a process of its own, driven through the middleware on loopback by a test
 centre: whole map, delta, a refused delta after a centre restart and the whole map resent, and a malformed
-map dropped with one warning while the node keeps what it had."""
+map and a pose of NaN dropped with one warning each while the node keeps what it had."""
 
 from __future__ import annotations
 
@@ -31,6 +31,8 @@ def test_the_robot_node_speaks_the_protocol_and_survives_a_bad_map() -> None:
         ["after_bad_map", True],
     ]
     assert result["centre_equals_in_process"]  # the same map the objects give in one process
-    assert len(result["warnings"]) == 1
-    assert result["warnings"][0].endswith("map dropped: occupancy grid data holds 77 values for 10 x 8 = 80 cells")
+    warnings = result["warnings"]
+    assert len(warnings) == 2
+    assert warnings[0].endswith("map dropped: occupancy grid data holds 77 values for 10 x 8 = 80 cells")
+    assert warnings[1].endswith("pose dropped: position (nan, 0.0) and heading 0.0 must be finite")
     assert result["robot_exit"] == 0  # ended by the test, cleanly

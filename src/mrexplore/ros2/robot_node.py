@@ -105,7 +105,10 @@ class RobotNode:
         self.has_map = True
 
     def _on_pose(self, msg: Any) -> None:
-        x, y, _ = pose_xyyaw(msg.pose.pose)
+        x, y, yaw = pose_xyyaw(msg.pose.pose)
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(yaw)):
+            self._warn(f"pose dropped: position ({x}, {y}) and heading {yaw} must be finite")
+            return
         o = self.settings.offset
         c, s = math.cos(o.yaw_rad), math.sin(o.yaw_rad)
         xy = (o.x_m + c * x - s * y, o.y_m + s * x + c * y)  # the robot's map frame -> the team frame
