@@ -54,6 +54,17 @@ class FrameOffset:
     y_m: float = 0.0
     yaw_rad: float = 0.0
 
+    def to_team(self, x: float, y: float) -> tuple[float, float]:
+        """A point of the robot's map frame in the team frame.
+
+        Examples
+        --------
+        >>> tuple(round(v, 6) for v in FrameOffset(1.0, 0.0, math.pi / 2).to_team(2.0, 0.0))
+        (1.0, 2.0)
+        """
+        c, s = math.cos(self.yaw_rad), math.sin(self.yaw_rad)
+        return self.x_m + c * x - s * y, self.y_m + s * x + c * y
+
 
 def checked_values(msg: OccupancyGridData, thresholds: GridThresholds) -> NDArray[np.int8]:
     """``(height, width) int8`` the message's values, rows along +y; a malformed message raises one

@@ -75,7 +75,6 @@ class RobotNode:
         self.agent = RobotAgent(settings.index, (team.height, team.width), settings.preprocess, SensorConfig())
         self.position_rc: tuple[int, int] | None = None
         self.has_map = False
-        self.maps_dropped = 0
         self._sent: tuple[int, Outgoing, SparseFrontierMap] | None = None
         """The round answered last, its messages and the one sent (what an acknowledgement confirms)."""
         self._sent_bytes = b""
@@ -98,7 +97,6 @@ class RobotNode:
         try:
             state = state_in_team_frame(grid_data(msg), s.offset, s.team, s.thresholds)
         except MrExploreError as exc:
-            self.maps_dropped += 1
             self._warn(f"map dropped: {exc}")
             return
         self.agent.sense_state(state)
@@ -109,9 +107,7 @@ class RobotNode:
         if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(yaw)):
             self._warn(f"pose dropped: position ({x}, {y}) and heading {yaw} must be finite")
             return
-        o = self.settings.offset
-        c, s = math.cos(o.yaw_rad), math.sin(o.yaw_rad)
-        xy = (o.x_m + c * x - s * y, o.y_m + s * x + c * y)  # the robot's map frame -> the team frame
+        xy = self.settings.offset.to_team(x, y)
         rc = self.settings.team.xy_to_rc(xy)
         if not self.settings.team.contains(rc):
             self._warn(f"pose dropped: ({xy[0]:.2f}, {xy[1]:.2f}) m lies outside the team's grid")
