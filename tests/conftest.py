@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import heapq
+import importlib.util
 import math
 from pathlib import Path
 
@@ -54,6 +55,13 @@ def cells(text: str, mark: str = "x") -> list[list[int]]:
 def truth_map(text: str, resolution_m: float = 0.05, name: str = "ascii") -> GroundTruthMap:
     occ = bool_grid(text)
     return GroundTruthMap(occ, GridFrame(occ.shape[0], occ.shape[1], resolution_m), name)
+
+
+requires_rclpy = pytest.mark.skipif(
+    importlib.util.find_spec("rclpy") is None,
+    reason="rclpy is not installed (pip install -e '.[ros2]'); CI installs it",
+)
+"""Marks a test that needs ROS 2's rclpy (the ros2 extra)."""
 
 
 def require_shared_maps() -> Path:

@@ -3,18 +3,14 @@ frontier message published, received and read back unchanged."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import subprocess
 import sys
 from pathlib import Path
 
-import pytest
+from conftest import requires_rclpy
 
-pytestmark = pytest.mark.skipif(
-    importlib.util.find_spec("rclpy") is None,
-    reason="rclpy is not installed (pip install -e '.[ros2]'); CI installs it",
-)
+pytestmark = requires_rclpy
 
 
 def test_the_team_map_and_a_frontier_message_cross_the_middleware_unchanged() -> None:

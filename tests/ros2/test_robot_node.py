@@ -4,18 +4,14 @@ map and a pose of NaN dropped with one warning each while the node keeps what it
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import subprocess
 import sys
 from pathlib import Path
 
-import pytest
+from conftest import requires_rclpy
 
-pytestmark = pytest.mark.skipif(
-    importlib.util.find_spec("rclpy") is None,
-    reason="rclpy is not installed (pip install -e '.[ros2]'); CI installs it",
-)
+pytestmark = requires_rclpy
 
 
 def test_the_robot_node_speaks_the_protocol_and_survives_a_bad_map() -> None:

@@ -74,10 +74,11 @@ def checked_values(msg: OccupancyGridData, thresholds: GridThresholds) -> NDArra
     --------
     >>> from mrexplore.config import GridThresholds
     >>> bad = OccupancyGridData(2, 2, float("nan"), (0.0, 0.0, 0.0), (0, 0, 0, 0))
-    >>> checked_values(bad, GridThresholds())
-    Traceback (most recent call last):
-    ...
-    mrexplore.types.MrExploreError: occupancy grid resolution must be a finite number > 0 metres, got nan
+    >>> try:
+    ...     checked_values(bad, GridThresholds())
+    ... except MrExploreError as exc:
+    ...     print(exc)
+    occupancy grid resolution must be a finite number > 0 metres, got nan
     """
     w, h, res = msg.width, msg.height, msg.resolution_m
     if not (isinstance(res, float | int) and math.isfinite(res) and res > 0):
