@@ -4,6 +4,7 @@ own, this script playing the centre (a TeamCentre) through the middleware on loo
 from __future__ import annotations
 
 import json
+import signal
 import subprocess
 import sys
 import time
@@ -132,14 +133,16 @@ def main() -> None:
         node.destroy_node()
         rclpy.shutdown()
     finally:
-        robot.terminate()
+        robot.send_signal(signal.SIGTERM)  # as a launcher stops it (Ctrl-C takes the same way out)
+        t_stop = time.monotonic()
         try:
-            _, err = robot.communicate(timeout=15)
+            _, err = robot.communicate(timeout=30)
         except subprocess.TimeoutExpired:
             robot.kill()
             _, err = robot.communicate()
         result["warnings"] = [line for line in err.splitlines() if "WARN" in line]
         result["robot_exit"] = robot.returncode
+        result["stop_s"] = round(time.monotonic() - t_stop, 2)
     print(json.dumps(result))
 
 

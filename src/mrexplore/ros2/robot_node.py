@@ -152,18 +152,26 @@ def run_robot_node(settings: RobotNodeSettings, loopback: bool = True) -> None:
 
         domain = os.environ.get("ROS_DOMAIN_ID")
         keep_on_loopback(int(domain) if domain and domain.isdigit() else None)
-    import rclpy
-    from rclpy.executors import ExternalShutdownException
+    import signal
 
-    rclpy.init()
+    import rclpy
+    from rclpy.signals import SignalHandlerOptions
+
+    def stop(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt  # SIGTERM ends the node as Ctrl-C does
+
+    # The node takes SIGINT and SIGTERM itself: under rclpy's own handlers a SIGTERM left the process
+    # hanging in about half the runs of the middleware test under load.
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    signal.signal(signal.SIGTERM, stop)
     node = rclpy.create_node(f"mrexplore_{settings.name}")
-    RobotNode(node, settings)
-    node.get_logger().info(f"robot {settings.name} ready")
     try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
+        RobotNode(node, settings)
+        node.get_logger().info(f"robot {settings.name} ready")
+        while True:  # a bounded wait, so that a signal's KeyboardInterrupt is raised within it
+            rclpy.spin_once(node, timeout_sec=0.2)
+    except KeyboardInterrupt:
         pass
     finally:
         node.destroy_node()
-        if rclpy.ok():
-            rclpy.shutdown()
+        rclpy.try_shutdown()
