@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -26,7 +27,20 @@ from mrexplore.config import GridThresholds
 from mrexplore.maps.frame import GridFrame
 from mrexplore.types import CellState, MrExploreError, StateGrid
 
-__all__ = ["OccupancyGridData", "FrameOffset", "checked_values", "state_in_team_frame", "occupancy_values", "yaw_of"]
+__all__ = [
+    "OccupancyGridData",
+    "FrameOffset",
+    "checked_values",
+    "state_in_team_frame",
+    "occupancy_values",
+    "yaw_of",
+    "OCCUPANCY_VALUES",
+]
+
+OCCUPANCY_VALUES = np.array([0, 100, -1], dtype=np.int8)
+"""An OccupancyGrid's value of each cell state, indexed by :class:`CellState` (free, occupied, unknown)."""
+Coordinate = TypeVar("Coordinate", float, NDArray[np.floating])
+"""A coordinate in metres: a number, or an array of them."""
 
 
 @dataclass(frozen=True)
@@ -54,16 +68,20 @@ class FrameOffset:
     y_m: float = 0.0
     yaw_rad: float = 0.0
 
-    def to_team(self, x: float, y: float) -> tuple[float, float]:
-        """A point of the robot's map frame in the team frame.
+    def to_team(self, x: Coordinate, y: Coordinate) -> tuple[Coordinate, Coordinate]:
+        """Points (numbers or arrays) of the robot's map frame in the team frame.
 
         Examples
         --------
         >>> tuple(round(v, 6) for v in FrameOffset(1.0, 0.0, math.pi / 2).to_team(2.0, 0.0))
         (1.0, 2.0)
         """
-        c, s = math.cos(self.yaw_rad), math.sin(self.yaw_rad)
-        return self.x_m + c * x - s * y, self.y_m + s * x + c * y
+        x_t, y_t = _rotate(x, y, self.yaw_rad)
+        return x_t + self.x_m, y_t + self.y_m
+
+    def to_robot(self, x: Coordinate, y: Coordinate) -> tuple[Coordinate, Coordinate]:
+        """Points of the team frame in the robot's map frame (the inverse of :meth:`to_team`)."""
+        return _rotate(x - self.x_m, y - self.y_m, -self.yaw_rad)
 
 
 def checked_values(msg: OccupancyGridData, thresholds: GridThresholds) -> NDArray[np.int8]:
@@ -122,7 +140,7 @@ def state_in_team_frame(
         return out
     x_t = team.origin_xy[0] + (cols + 0.5) * team.resolution_m
     y_t = team.origin_xy[1] + (team.height - 1 - rows + 0.5) * team.resolution_m
-    x_m, y_m = _rotate(x_t - offset.x_m, y_t - offset.y_m, -offset.yaw_rad)
+    x_m, y_m = offset.to_robot(x_t, y_t)
     x_g, y_g = _rotate(x_m - ox, y_m - oy, -oyaw)
     j = np.floor(x_g / msg.resolution_m).astype(np.int64)
     i = np.floor(y_g / msg.resolution_m).astype(np.int64)
@@ -131,7 +149,7 @@ def state_in_team_frame(
     return out
 
 
-def _rotate(x: NDArray[np.floating], y: NDArray[np.floating], yaw: float) -> tuple[NDArray[np.floating], ...]:
+def _rotate(x: Coordinate, y: Coordinate, yaw: float) -> tuple[Coordinate, Coordinate]:
     """Points turned by ``yaw`` radians about the origin."""
     c, s = math.cos(yaw), math.sin(yaw)
     return c * x - s * y, s * x + c * y
@@ -146,8 +164,7 @@ def _team_cells_near(
     w_m, h_m = msg.width * msg.resolution_m, msg.height * msg.resolution_m
     corners = np.array([[0.0, 0.0], [w_m, 0.0], [0.0, h_m], [w_m, h_m]])
     x_m, y_m = _rotate(corners[:, 0], corners[:, 1], oyaw)
-    x_t, y_t = _rotate(x_m + ox, y_m + oy, offset.yaw_rad)
-    x_t, y_t = x_t + offset.x_m, y_t + offset.y_m
+    x_t, y_t = offset.to_team(x_m + ox, y_m + oy)
     res = team.resolution_m
     c0 = max(0, math.floor((x_t.min() - team.origin_xy[0]) / res))
     c1 = min(team.width, math.ceil((x_t.max() - team.origin_xy[0]) / res))
@@ -159,9 +176,6 @@ def _team_cells_near(
     return rr.ravel().astype(np.int64), cc.ravel().astype(np.int64)
 
 
-_VALUES = np.array([0, 100, -1], dtype=np.int8)  # indexed by CellState: free, occupied, unknown
-
-
 def occupancy_values(state: StateGrid) -> NDArray[np.int8]:
     """``(H * W,) int8`` a grid's cells as an OccupancyGrid's data: 0 free, 100 occupied, -1 unknown, row-major
     from the bottom row (rows along +y), the inverse of :func:`state_in_team_frame` on the same grid.
@@ -171,7 +185,7 @@ def occupancy_values(state: StateGrid) -> NDArray[np.int8]:
     >>> occupancy_values(np.array([[2, 0], [0, 1]], np.uint8)).tolist()
     [0, 100, -1, 0]
     """
-    return _VALUES[state[::-1]].ravel()
+    return OCCUPANCY_VALUES[state[::-1]].ravel()
 
 
 def yaw_of(qx: float, qy: float, qz: float, qw: float) -> float:

@@ -53,7 +53,7 @@ class DecisionInput:
     >>> from mrexplore.types import CellState
     >>> grid = np.full((5, 5), CellState.FREE, np.uint8); grid[:, 4] = CellState.UNKNOWN
     >>> inp = DecisionInput(grid, np.array([[2, 0]], np.int32), resolution_m=0.1)
-    >>> inp.n_robots, inp.blacklist is None
+    >>> len(inp.robots_rc), inp.blacklist is None
     (1, True)
     """
 
@@ -76,10 +76,6 @@ class DecisionInput:
     frontiers: Frontiers | None = None
     """Those of ``state`` where the caller has them (the centre keeps them where the grid changed); None:
     detected from ``state``."""
-
-    @property
-    def n_robots(self) -> int:
-        return len(self.robots_rc)
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrexplore.boxes import Box, box_union
+from mrexplore.maps.occupancy_grid import OCCUPANCY_VALUES
 from mrexplore.preprocessing.onboard import OnBoardGrid
 from mrexplore.preprocessing.sparse_codec import HEADER, encode
 from mrexplore.preprocessing.sparse_map import (
@@ -45,10 +46,6 @@ TransmissionMode = Literal["delta", "full"]
 TRANSMISSION_MODES: tuple[TransmissionMode, ...] = ("delta", "full")
 GRID_BASELINE_FIELDS = ("bytes_grid", "bytes_grid_zlib", "bytes_grid_delta_zlib")
 """The record's fields of Table II's int8-grid baselines: empty where a mission did not count them."""
-_ROS_VALUES = {CellState.FREE: 0, CellState.OCCUPIED: 100, CellState.UNKNOWN: -1}
-_ROS_LUT = np.zeros(len(CellState), dtype=np.int8)
-for _state, _value in _ROS_VALUES.items():
-    _ROS_LUT[_state] = _value
 _EMPTY: Box = (0, 0, 0, 0)
 
 
@@ -110,7 +107,7 @@ def occupancy_grid_bytes(state: StateGrid) -> tuple[int, int]:
     >>> raw - HEADER.size  # a 2 x 5 box
     10
     """
-    data = _ros_box(state, _ROS_LUT, int(CellState.UNKNOWN))
+    data = _ros_box(state, OCCUPANCY_VALUES, int(CellState.UNKNOWN))
     if len(data) == 0:
         return HEADER.size, HEADER.size
     return HEADER.size + len(data), HEADER.size + len(zlib.compress(data.data, 6))
@@ -175,7 +172,7 @@ class RobotSender:
         self.robot = robot
         self._acked = np.zeros(shape, dtype=np.uint8)
         self._acked_round = FULL
-        self._acked_grid = np.full(shape, _ROS_VALUES[CellState.UNKNOWN], dtype=np.int8)
+        self._acked_grid = np.full(shape, OCCUPANCY_VALUES[CellState.UNKNOWN], dtype=np.int8)
         self._sent_grid: tuple[tuple[slice, slice], NDArray[np.int8]] | None = None
         self._unconfirmed = False
         """The last message got no acknowledgement: the centre may hold it or not, so send the whole map."""
@@ -245,7 +242,7 @@ class RobotSender:
         changed since the last acknowledged round, as gaps between their sorted indices (uint32) and their
         values (int8), zlib level 6, plus the frontier message's header. ``own`` is the robot's grid in
         ``window`` (every known cell lies inside it)."""
-        ros = _ROS_LUT[own]
+        ros = OCCUPANCY_VALUES[own]
         width = self._acked_grid.shape[1]
         local = np.flatnonzero(ros != self._acked_grid[window])
         rows, cols = np.divmod(local, ros.shape[1])
