@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mrexplore.bench.compare import TABLE_I, compare_runs, table_time, team_ratio
 from mrexplore.bench.report import write_report
@@ -159,15 +160,8 @@ def _add_progress(p: argparse.ArgumentParser) -> None:
     )
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="mrexplore", description="Multi-robot exploration with a hierarchical planner.")
-    parser.add_argument(
-        "--maps-dir",
-        default=None,
-        help=f"where the example maps are (training maps in train/); default ${MAPS_ENV}, else ../shared/maps",
-    )
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    ex = sub.add_parser("explore", help="explore one map and report the measures")
+def _add_mission_flags(ex: argparse.ArgumentParser) -> None:
+    """The mission's flags: ``explore``'s, which ``ros2 sim`` and ``ros2 launch`` take too."""
     ex.add_argument(
         "--map",
         default=DEFAULT_MAP,
@@ -206,13 +200,6 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="X,Y",
         help="start of a robot in metres (map frame); once per robot, or once to place the team near it",
     )
-    ex.add_argument("--gif", help="write an animation of the run to this path")
-    ex.add_argument("--png", help="write a picture of the final map to this path")
-    ex.add_argument(
-        "--save-map",
-        metavar="PATH",
-        help="write the centre's final map as ROS map_server PATH.yaml + PATH.pgm",
-    )
     ex.add_argument(
         "--transmission",
         choices=("delta", "full"),
@@ -220,6 +207,25 @@ def build_parser() -> argparse.ArgumentParser:
         help="what the centre rebuilds from: sparse-map deltas (default) or whole sparse maps (the paper's)",
     )
     ex.add_argument("--no-baseline-bytes", action="store_true", help=BASELINE_BYTES_HELP)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="mrexplore", description="Multi-robot exploration with a hierarchical planner.")
+    parser.add_argument(
+        "--maps-dir",
+        default=None,
+        help=f"where the example maps are (training maps in train/); default ${MAPS_ENV}, else ../shared/maps",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    ex = sub.add_parser("explore", help="explore one map and report the measures")
+    _add_mission_flags(ex)
+    ex.add_argument("--gif", help="write an animation of the run to this path")
+    ex.add_argument("--png", help="write a picture of the final map to this path")
+    ex.add_argument(
+        "--save-map",
+        metavar="PATH",
+        help="write the centre's final map as ROS map_server PATH.yaml + PATH.pgm",
+    )
     ex.add_argument("--json", action="store_true", help="print one JSON object with the measures on stdout")
     _add_config_flags(ex, "flags override it")
     _add_progress(ex)
@@ -299,59 +305,192 @@ def _floats(count: int, what: str) -> Any:
     return parse
 
 
-def _add_ros2(sub: Any) -> None:
-    rp = sub.add_parser("ros2", help="run the layers on ROS 2 robots (docs/ros2.md)")
-    kinds = rp.add_subparsers(dest="ros2", required=True, parser_class=_Parser)
-    ro = kinds.add_parser("robot", help="one robot's on-board work: its map -> sparse frontier messages")
-    ro.add_argument("--name", required=True, help="the robot's name (its topics: /NAME/map, /NAME/pose)")
-    ro.add_argument("--index", type=_SEED, required=True, help="the robot's index in the team, from 0")
-    ro.add_argument(
+_ROS2_HELP = """Run the three layers on ROS 2 robots (docs/ros2.md). On each robot: 'mrexplore ros2 robot'; on the
+computing centre: 'mrexplore ros2 centre'; to try them without robots: 'mrexplore ros2 launch', which starts
+'mrexplore ros2 sim' (the simulator as ROS 2 robots), a robot node per robot and the centre, on this machine.
+
+A deployment file (--deployment, YAML) holds a real team: the team grid, each robot's name, frame offset, frame
+and topics, the centre's timing. Without one, --robots names the robots (one shared frame, default topics)
+and --team-grid sets the grid. Traffic stays on this machine's loopback unless --network is given."""
+
+
+def _add_team_flags(p: argparse.ArgumentParser, robots: bool = True) -> None:
+    p.add_argument("--deployment", default=None, metavar="FILE", help="YAML deployment file (docs/ros2.md)")
+    if robots:
+        p.add_argument(
+            "--robots", default=None, metavar="NAMES", help="comma-separated robot names, without a deployment"
+        )
+    p.add_argument(
         "--team-grid",
         type=_floats(4, "X0,Y0,WIDTH,HEIGHT in metres"),
-        required=True,
+        default=None,
         metavar="X0,Y0,WIDTH,HEIGHT",
-        help="the team's grid in the team frame: its lower-left corner and size, metres",
+        help="the team's grid in the team frame: lower-left corner and size, metres (default: the deployment's)",
     )
-    ro.add_argument("--resolution", type=_POSITIVE, default=MapConfig.resolution_m, help="cell size, metres")
-    ro.add_argument(
-        "--offset",
-        type=_floats(3, "X,Y,YAW (metres, radians)"),
-        default=(0.0, 0.0, 0.0),
-        metavar="X,Y,YAW",
-        help="where the robot's map frame lies in the team frame (default 0,0,0: one shared frame)",
-    )
-    ro.add_argument("--pose-type", default="pose_with_covariance", help="pose_with_covariance (AMCL) or odometry")
-    ro.add_argument(
+    p.add_argument("--resolution", type=_POSITIVE, default=None, help="cell size of the team grid, metres")
+    p.add_argument(
         "--network",
         action="store_true",
         help="use the system's DDS settings (default: traffic kept on this machine's loopback)",
     )
+    p.add_argument("--config", default=None, metavar="FILE", help="YAML file of settings ('mrexplore config')")
+
+
+def _add_ros2(sub: Any) -> None:
+    rp = sub.add_parser(
+        "ros2",
+        help="run the layers on ROS 2 robots (docs/ros2.md)",
+        description=_ROS2_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    kinds = rp.add_subparsers(dest="ros2", required=True, parser_class=_Parser)
+    ro = kinds.add_parser("robot", help="one robot's on-board work: its map -> sparse frontier messages")
+    ro.add_argument("--name", required=True, help="the robot's name (its topics: /NAME/map, /NAME/pose)")
+    ro.add_argument("--index", type=_SEED, default=None, help="the robot's index in the team, from 0")
     ro.add_argument(
-        "--config", default=None, metavar="FILE", help="YAML file of settings; the robot reads its preprocess section"
+        "--offset",
+        type=_floats(3, "X,Y,YAW (metres, radians)"),
+        default=None,
+        metavar="X,Y,YAW",
+        help="where the robot's map frame lies in the team frame (default 0,0,0: one shared frame)",
     )
+    ro.add_argument("--pose-type", default=None, help="pose_with_covariance (AMCL, default) or odometry")
+    _add_team_flags(ro, robots=False)
+    ce = kinds.add_parser("centre", help="the computing centre: frontier messages -> layers 1-3 -> Nav2 goals")
+    ce.add_argument(
+        "--strategy",
+        default=DEFAULT_STRATEGY,
+        help=f"one of {', '.join(strategy_names())} but oracle (default {DEFAULT_STRATEGY})",
+    )
+    ce.add_argument("--policy", default=None, help=POLICY_HELP)
+    ce.add_argument(
+        "--no-local", action="store_true", help="turn the local routing layer off: robots go to cluster centres"
+    )
+    ce.add_argument("--seed", type=_SEED, default=0, help="seed of a planner that draws (default 0)")
+    ce.add_argument("--lockstep", action="store_true", help="take rounds from 'mrexplore ros2 sim --lockstep'")
+    ce.add_argument(
+        "--direct-maps",
+        action="store_true",
+        help="read each robot's map and pose here, no robot node needed (no bandwidth saving)",
+    )
+    ce.add_argument("--record", default=None, metavar="FILE", help="write the centre's record (JSON) here at the end")
+    _add_team_flags(ce)
+    si = kinds.add_parser("sim", help="the simulator as ROS 2 robots (maps, poses, Nav2's goals and status)")
+    _add_mission_flags(si)
+    si.add_argument("--lockstep", action="store_true", help="advance only once the centre answered each decision")
+    si.add_argument("--speed", type=_POSITIVE, default=10.0, help="simulation steps a second in real time (default 10)")
+    si.add_argument("--json", action="store_true", help="print the run's record as JSON on stdout")
+    si.add_argument("--network", action="store_true", help="use the system's DDS settings (default: loopback)")
+    _add_config_flags(si, "flags override it")
+    la = kinds.add_parser(
+        "launch", help="sim, robot nodes and centre as separate processes on this machine (a demo, or a check)"
+    )
+    _add_mission_flags(la)
+    la.add_argument("--lockstep", action="store_true", help="the mission equals 'mrexplore explore' step for step")
+    la.add_argument("--speed", type=_POSITIVE, default=10.0, help="simulation steps a second in real time (default 10)")
+    la.add_argument("--direct-maps", action="store_true", help="no robot nodes: the centre reads the robots' maps")
+    la.add_argument(
+        "--json", action="store_true", help="print explore's record plus the bytes measured on the wire, as JSON"
+    )
+    la.add_argument("--network", action="store_true", help="use the system's DDS settings (default: loopback)")
+    _add_config_flags(la, "flags override it")
 
 
-def _ros2(args: argparse.Namespace) -> str:
-    from mrexplore.maps.frame import GridFrame
-    from mrexplore.maps.occupancy_grid import FrameOffset
+def _deployment(args: argparse.Namespace, run: RunConfig) -> tuple[Any, Any]:
+    """The deployment and the team grid's frame from ``--deployment`` or ``--robots`` and ``--team-grid``."""
+    from mrexplore.ros2.deployment import Deployment, TeamGrid, read_deployment
 
+    if args.deployment:
+        dep = read_deployment(args.deployment)
+    else:
+        names = getattr(args, "robots", None) or getattr(args, "name", None)
+        if not names:
+            raise MrExploreError("name the robots: --robots robot1,robot2 or --deployment FILE")
+        dep = Deployment.of_names([n.strip() for n in names.split(",")], TeamGrid())
+    grid = dep.team_grid
+    if args.team_grid is not None:
+        x0, y0, width, height = args.team_grid
+        grid = replace(grid, x0=x0, y0=y0, width=width, height=height)
+    if args.resolution is not None:
+        grid = replace(grid, resolution=args.resolution)
+    elif args.team_grid is not None and not args.deployment:
+        grid = replace(grid, resolution=MapConfig.resolution_m)
+    return dep, grid.frame(run.map.max_cells)
+
+
+def _ros2(args: argparse.Namespace, argv: list[str]) -> str:
+    import importlib.util
+
+    if importlib.util.find_spec("rclpy") is None:  # found, not imported: DDS settings must come first
+        raise MrExploreError("ROS 2 commands need rclpy; install it with: pip install -e '.[ros2]'")
+    if args.ros2 in ("sim", "launch"):
+        return _ros2_sim(args, argv)
     run = read_config_file(args.config) if args.config else RunConfig()
-    x0, y0, width_m, height_m = args.team_grid
-    if width_m <= 0 or height_m <= 0:
-        raise MrExploreError(f"--team-grid must have a size > 0 metres, got {width_m} x {height_m}")
-    cells = math.ceil(width_m / args.resolution) * math.ceil(height_m / args.resolution)
-    if cells > run.map.max_cells:
-        raise MrExploreError(f"--team-grid holds {cells:,} cells at {args.resolution} m, more than map.max_cells")
-    team = GridFrame(
-        math.ceil(height_m / args.resolution), math.ceil(width_m / args.resolution), args.resolution, (x0, y0)
-    )
-    try:
+    dep, team = _deployment(args, run)
+    loopback = not args.network
+    if args.ros2 == "robot":
+        from mrexplore.maps.occupancy_grid import FrameOffset
         from mrexplore.ros2.robot_node import RobotNodeSettings, run_robot_node
-    except ImportError:
-        raise MrExploreError("ROS 2 commands need rclpy; install it with: pip install -e '.[ros2]'") from None
-    settings = RobotNodeSettings(args.name, args.index, team, FrameOffset(*args.offset), args.pose_type, run.preprocess)
-    run_robot_node(settings, loopback=not args.network)
-    return f"robot {args.name} stopped"
+
+        entry = dep.robot(args.name) if args.deployment else None
+        index = args.index if args.index is not None else (entry.index if entry else None)
+        if index is None:
+            raise MrExploreError("give the robot's place in the team: --index N, or a --deployment that names it")
+        offset = FrameOffset(*args.offset) if args.offset else (entry.offset if entry else FrameOffset())
+        pose_type = args.pose_type or (entry.pose_type if entry else "pose_with_covariance")
+        robot = RobotNodeSettings(args.name, index, team, offset, pose_type, run.preprocess, entry=entry)
+        run_robot_node(robot, loopback=loopback)
+        return f"robot {args.name} stopped"
+    from mrexplore.ros2.centre_node import CentreSettings, run_centre_node
+
+    strategy = make_strategy(
+        args.strategy,
+        run.global_planning,
+        run.preprocess,
+        run.local_planning,
+        local=not args.no_local,
+        policy=args.policy,
+        coscan_cfg=run.coscan,
+    )
+    if args.record:
+        _check_output(args.record, "--record")
+    record = Path(args.record) if args.record else None
+    settings = CentreSettings(dep, strategy, team, args.lockstep, record, args.seed, args.direct_maps, run.preprocess)
+    why = run_centre_node(settings, loopback=loopback)
+    return f"centre stopped: {why}"
+
+
+def _ros2_sim(args: argparse.Namespace, argv: list[str]) -> str:
+    """``ros2 sim`` and ``ros2 launch``: the mission's settings as explore reads them."""
+    from mrexplore.ros2.deployment import Deployment, TeamGrid
+
+    run, strategy, truth, starts = _mission_setup(args)
+    spec = MissionSpec(truth, strategy, run.sim, run.mission, seed=args.seed, starts_rc=starts)
+    frame = truth.frame
+    grid = TeamGrid(
+        frame.origin_xy[0],
+        frame.origin_xy[1],
+        frame.width * frame.resolution_m,
+        frame.height * frame.resolution_m,
+        frame.resolution_m,
+    )
+    names = [f"robot{i + 1}" for i in range(run.sim.robots)]
+    dep = Deployment.of_names(names, grid)
+    if args.ros2 == "sim":
+        from mrexplore.ros2.sim_node import SimSettings, run_sim_node
+
+        record = run_sim_node(SimSettings(spec, dep, args.lockstep, args.speed), loopback=not args.network)
+        if args.json:
+            print(json.dumps(strict_json(record), allow_nan=False))
+        return f"simulation ended: {record['done_reason']} after {record['steps']} steps"
+    from mrexplore.ros2.launch import launch_team
+
+    record = launch_team(spec, run, dep, grid, argv, args)
+    measures, starts_rc = record.pop("measures"), record.pop("starts_rc")
+    full = {**_mission_record(run, strategy, truth, args, measures, starts_rc), **record}
+    if args.json:
+        print(json.dumps(strict_json(full), allow_nan=False))
+    return _summary(full) if not args.json else "launch ended"
 
 
 def _add_report(sub: Any) -> None:
@@ -567,9 +706,11 @@ def _train(args: argparse.Namespace) -> str:
     )
 
 
-def _explore(args: argparse.Namespace) -> dict[str, Any]:
+def _mission_setup(args: argparse.Namespace) -> tuple[RunConfig, Any, Any, NDArray[np.int32] | None]:
+    """The run's settings, strategy, map and starts from explore's flags (shared by ``ros2 sim`` and
+    ``ros2 launch``), each checked before any work."""
     run = _run_config(args)
-    map_cfg, sim_cfg, mission_cfg = run.map, run.sim, run.mission
+    sim_cfg = run.sim
     strategy = make_strategy(
         args.strategy,
         run.global_planning,
@@ -579,11 +720,8 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
         policy=args.policy,
         coscan_cfg=run.coscan,
     )
-    _check_output(args.gif, "--gif")
-    _check_output(args.png, "--png")
-    _check_output(args.save_map, "--save-map")
     _check_failures(run, sim_cfg.robots)
-    truth = load_map(args.map, map_cfg)
+    truth = load_map(args.map, run.map)
     starts = None
     if args.start:
         if len(set(args.start)) != len(args.start):
@@ -598,6 +736,15 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
             starts = draw_starts(truth, sim_cfg.robots, sim_cfg.start_spread_m, rng, tuple(given[0]))
         else:
             raise MrExploreError(f"--start must be given once or once per robot ({sim_cfg.robots}), got {len(given)}")
+    return run, strategy, truth, starts
+
+
+def _explore(args: argparse.Namespace) -> dict[str, Any]:
+    _check_output(args.gif, "--gif")
+    _check_output(args.png, "--png")
+    _check_output(args.save_map, "--save-map")
+    run, strategy, truth, starts = _mission_setup(args)
+    sim_cfg, mission_cfg = run.sim, run.mission
     recorder = GifRecorder() if (args.gif or args.png) else None
     result = run_mission(
         MissionSpec(truth, strategy, sim_cfg, mission_cfg, seed=args.seed, starts_rc=starts),
@@ -610,13 +757,20 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
         save_png(recorder.final_frame(), args.png)
     if args.save_map:
         save_ros_map(result.final_state, truth.frame, args.save_map)
+    return _mission_record(run, strategy, truth, args, result.measures.to_dict(), result.starts_rc)
+
+
+def _mission_record(
+    run: RunConfig, strategy: Any, truth: Any, args: argparse.Namespace, measures: dict[str, Any], starts_rc: Any
+) -> dict[str, Any]:
+    """explore's record of one mission: what ran, its measures, the starts and every setting."""
     record: dict[str, Any] = {
         "strategy": strategy.name,
         "map": truth.name,
-        "robots": sim_cfg.robots,
+        "robots": run.sim.robots,
         "seed": args.seed,
-        **result.measures.to_dict(),
-        "starts_xy": [list(truth.frame.rc_to_xy((int(r), int(c)))) for r, c in result.starts_rc],
+        **measures,
+        "starts_xy": [list(truth.frame.rc_to_xy((int(r), int(c)))) for r, c in starts_rc],
         "policy": strategy.policy,
         "config": {
             **config_to_dict(replace(run, train=TrainConfig())),
@@ -702,7 +856,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         elif args.command == "report":
             print(_report(args, argv))
         elif args.command == "ros2":
-            print(_ros2(args), file=sys.stderr)
+            print(_ros2(args, argv), file=sys.stderr)
     except MrExploreError as exc:
         print(f"mrexplore: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

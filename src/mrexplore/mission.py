@@ -58,11 +58,16 @@ __all__ = [
     "MeasuresRecorder",
     "run_mission",
     "Observer",
+    "Centre",
 ]
 
 Observer = Callable[[ExplorationSim, Decision | None, NDArray[np.int32], LinkStatus], None]
 """Called after the first scan and after every step with the sim, the latest decision, the goals and
 what the centre knows of each robot."""
+
+Centre = Callable[[DecisionInput], Decision]
+"""Who answers a decision: the strategy's own pipeline in this process (the default), or a centre elsewhere
+that answers the same input from the messages it received itself (``mrexplore ros2 sim --lockstep``)."""
 
 
 @dataclass
@@ -180,7 +185,7 @@ class MissionSnapshot:
     state: dict[str, object] = field(repr=False)
 
 
-_NOT_COPIED = ("spec", "strategy", "observer", "_bar", "truth")
+_NOT_COPIED = ("spec", "strategy", "observer", "_bar", "truth", "centre")
 """Shared, read-only during a mission (the ground truth) or owned by the caller: never snapshotted."""
 
 
@@ -206,8 +211,15 @@ class Mission:
     True
     """
 
-    def __init__(self, spec: MissionSpec, observer: Observer | None = None, progress: bool | None = None) -> None:
-        """``progress``: show a coverage bar; default: only when stderr is a terminal."""
+    def __init__(
+        self,
+        spec: MissionSpec,
+        observer: Observer | None = None,
+        progress: bool | None = None,
+        centre: Centre | None = None,
+    ) -> None:
+        """``progress``: show a coverage bar; default: only when stderr is a terminal. ``centre``: who answers
+        :meth:`decide` (default: ``spec.strategy.decide``)."""
         reset_peak()  # the episode's peak memory, from here (the map is already loaded)
         self.spec = spec
         self.sim_cfg = sim_cfg = spec.sim_cfg
@@ -215,6 +227,7 @@ class Mission:
         self.truth = truth = spec.truth
         self.strategy = strategy = spec.strategy
         self.observer = observer
+        self.centre = centre if centre is not None else strategy.decide
         self.rng = rng = np.random.default_rng(spec.seed)
         starts_rc = spec.starts_rc
         if starts_rc is None:
@@ -289,6 +302,11 @@ class Mission:
     @property
     def steps(self) -> int:
         return self.sim.steps
+
+    @property
+    def active(self) -> NDArray[np.int64]:
+        """The robots of the pending decision (those the centre may assign to), in robot order."""
+        return self._active
 
     def snapshot(self) -> MissionSnapshot:
         """Copy of everything a step or a decision changes (the strategy, observer and truth are shared).
@@ -404,6 +422,10 @@ class Mission:
         self._abandoned[i] = [*self._abandoned[i][-(_ABANDONED_KEPT - 1) :], cur.copy()]
         return False
 
+    def sending(self) -> NDArray[np.bool_]:
+        """``(n_robots,) bool`` robots that send their maps at a round: alive and within radio range."""
+        return self.sim.alive & self._in_range()
+
     def _in_range(self) -> NDArray[np.bool_]:
         """``(n_robots,) bool`` robots within radio range of the relay (all without a range limit)."""
         if self._range_cells is None:
@@ -500,7 +522,7 @@ class Mission:
             link.restart_centre()
             self.blacklist = np.zeros(self.truth.shape, dtype=bool)  # the centre's memory too
         with timed(self.strategy.timer, "round"):
-            self.state = link.exchange(sim.beliefs, sim.positions_rc, sim.alive & self._in_range())
+            self.state = link.exchange(sim.beliefs, sim.positions_rc, self.sending())
         self.record.onboard_ms.extend(link.robot_ms_each)
         self._active = np.flatnonzero(link.status.assignable)
         current = self._current()
@@ -527,7 +549,7 @@ class Mission:
             self.record.plan_ms.append(self._centre_ms(t))
             self._idle_round()
             return None
-        decision = self._expand(self.strategy.decide(inp))
+        decision = self._expand(self.centre(inp))
         self.record.plan_ms.append(self._centre_ms(t))
         self._apply(decision)
         return decision

@@ -22,7 +22,7 @@ def main() -> None:
     from geometry_msgs.msg import PoseWithCovarianceStamped
     from nav_msgs.msg import OccupancyGrid
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-    from std_msgs.msg import UInt8MultiArray, UInt32, UInt32MultiArray
+    from std_msgs.msg import UInt8MultiArray, UInt32MultiArray
 
     from mrexplore.config import PreprocessConfig, SensorConfig
     from mrexplore.maps.frame import GridFrame
@@ -55,7 +55,7 @@ def main() -> None:
         )
         map_pub = node.create_publisher(OccupancyGrid, "/robot1/map", latched)
         pose_pub = node.create_publisher(PoseWithCovarianceStamped, "/robot1/pose", 10)
-        round_pub = node.create_publisher(UInt32, "/mrexplore/round", 10)
+        round_pub = node.create_publisher(UInt32MultiArray, "/mrexplore/round", 10)
         reply_pub = node.create_publisher(UInt32MultiArray, "/mrexplore/robot1/reply", 10)
         inbox: list[bytes] = []
         node.create_subscription(
@@ -82,7 +82,7 @@ def main() -> None:
             while not inbox and time.monotonic() - t0 < 30:
                 publish_world(state)
                 spin(0.1)
-                round_pub.publish(UInt32(data=round_))
+                round_pub.publish(UInt32MultiArray(data=[round_, 0, 0]))
                 spin(0.2)
             return inbox.pop(0)
 

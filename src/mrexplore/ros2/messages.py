@@ -4,20 +4,46 @@ bytes, the team map. The only module that knows the message types' fields."""
 from __future__ import annotations
 
 import array
-from typing import TYPE_CHECKING
+import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mrexplore.maps.frame import GridFrame
 from mrexplore.maps.occupancy_grid import OccupancyGridData, occupancy_values, yaw_of
 from mrexplore.types import StateGrid
 
 if TYPE_CHECKING:  # the message packages come with the ros2 extra; imported where a message is built
-    from geometry_msgs.msg import Pose
+    from geometry_msgs.msg import Pose, PoseStamped, PoseWithCovarianceStamped
     from nav_msgs.msg import OccupancyGrid
     from std_msgs.msg import UInt8MultiArray
+    from visualization_msgs.msg import MarkerArray
 
-__all__ = ["grid_data", "pose_xyyaw", "bytes_message", "message_bytes", "team_map_message"]
+__all__ = [
+    "grid_data",
+    "pose_xyyaw",
+    "bytes_message",
+    "message_bytes",
+    "team_map_message",
+    "goal_message",
+    "pose_message",
+    "markers_message",
+    "ROBOT_COLOURS",
+]
+
+ROBOT_COLOURS = (
+    (0.12, 0.47, 0.71),
+    (1.0, 0.5, 0.05),
+    (0.17, 0.63, 0.17),
+    (0.84, 0.15, 0.16),
+    (0.58, 0.4, 0.74),
+    (0.55, 0.34, 0.29),
+    (0.89, 0.47, 0.76),
+    (0.5, 0.5, 0.5),
+)
+"""One colour per robot (matplotlib's tab10), as in the package's pictures."""
 
 
 def grid_data(msg: OccupancyGrid) -> OccupancyGridData:
@@ -60,4 +86,85 @@ def team_map_message(state: StateGrid, frame: GridFrame, frame_id: str) -> Occup
     msg.info.origin.position.x, msg.info.origin.position.y = float(frame.origin_xy[0]), float(frame.origin_xy[1])
     msg.info.origin.orientation.w = 1.0
     msg.data = array.array("b", occupancy_values(state).tobytes())
+    return msg
+
+
+def _quaternion(yaw: float) -> tuple[float, float]:
+    return math.sin(yaw / 2), math.cos(yaw / 2)
+
+
+def goal_message(x: float, y: float, yaw: float, frame_id: str, stamp: Any) -> PoseStamped:
+    """A geometry_msgs/PoseStamped goal at ``(x, y)`` facing ``yaw`` in ``frame_id``."""
+    from geometry_msgs.msg import PoseStamped
+
+    msg = PoseStamped()
+    msg.header.frame_id, msg.header.stamp = frame_id, stamp
+    msg.pose.position.x, msg.pose.position.y = x, y
+    msg.pose.orientation.z, msg.pose.orientation.w = _quaternion(yaw)
+    return msg
+
+
+def pose_message(x: float, y: float, yaw: float, frame_id: str, stamp: Any) -> PoseWithCovarianceStamped:
+    """A geometry_msgs/PoseWithCovarianceStamped at ``(x, y)`` facing ``yaw``, as AMCL publishes it."""
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+
+    msg = PoseWithCovarianceStamped()
+    msg.header.frame_id, msg.header.stamp = frame_id, stamp
+    msg.pose.pose.position.x, msg.pose.pose.position.y = x, y
+    msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = _quaternion(yaw)
+    return msg
+
+
+def markers_message(
+    frontier_mask: NDArray[np.bool_],
+    centres_rc: NDArray[np.integer],
+    robots_rc: NDArray[np.integer],
+    routes: Sequence[NDArray[np.integer] | None],
+    frame: GridFrame,
+    frame_id: str,
+) -> MarkerArray:
+    """RViz markers in the team frame: a DELETEALL, the frontier cells (namespace ``frontiers``), one sphere
+    per cluster centre (``clusters``), each robot's goal (``goals``, one arrow from the robot to it) and its
+    route (``routes``), in the robot's colour."""
+    from geometry_msgs.msg import Point
+    from std_msgs.msg import ColorRGBA
+    from visualization_msgs.msg import Marker, MarkerArray
+
+    res = float(frame.resolution_m)
+
+    def point(rc: Any) -> Point:
+        x, y = frame.rc_to_xy((int(rc[0]), int(rc[1])))
+        return Point(x=float(x), y=float(y), z=0.05)
+
+    def marker(ns: str, mid: int, kind: int, colour: tuple[float, ...], size: float) -> Marker:
+        m = Marker()
+        m.header.frame_id, m.ns, m.id, m.type, m.action = frame_id, ns, mid, kind, Marker.ADD
+        m.pose.orientation.w = 1.0
+        m.scale.x = m.scale.y = m.scale.z = size
+        m.color = ColorRGBA(r=colour[0], g=colour[1], b=colour[2], a=1.0)
+        return m
+
+    clear = Marker()
+    clear.action = Marker.DELETEALL
+    out = [clear]
+    cells = marker("frontiers", 0, Marker.POINTS, (0.9, 0.1, 0.6), res)
+    cells.points = [point(rc) for rc in np.argwhere(frontier_mask)]
+    out.append(cells)
+    for k, rc in enumerate(np.asarray(centres_rc).reshape(-1, 2)):
+        sphere = marker("clusters", k, Marker.SPHERE, (0.9, 0.1, 0.6), 4 * res)
+        sphere.pose.position = point(rc)
+        out.append(sphere)
+    for i, route in enumerate(routes):
+        if route is None or len(route) == 0:
+            continue
+        colour = ROBOT_COLOURS[i % len(ROBOT_COLOURS)]
+        arrow = marker("goals", i, Marker.ARROW, colour, 2 * res)
+        arrow.scale.y = arrow.scale.z = 3 * res
+        arrow.points = [point(robots_rc[i]), point(route[0])]
+        out.append(arrow)
+        line = marker("routes", i, Marker.LINE_STRIP, colour, res)
+        line.points = [point(robots_rc[i])] + [point(rc) for rc in route]
+        out.append(line)
+    msg = MarkerArray()
+    msg.markers = out
     return msg

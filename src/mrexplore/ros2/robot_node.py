@@ -5,8 +5,10 @@ Topics (``NAME`` is the robot's name):
 
 - in: ``/NAME/map`` (nav_msgs/OccupancyGrid, transient local, as slam_toolbox and map_server publish it);
   ``/NAME/pose`` (geometry_msgs/PoseWithCovarianceStamped, as AMCL and slam_toolbox publish it, or
-  nav_msgs/Odometry); ``/mrexplore/round`` (std_msgs/UInt32: the centre asks for round r's maps);
-  ``/mrexplore/NAME/reply`` (std_msgs/UInt32MultiArray ``[round, kind]``, kind :data:`ACK` or
+  nav_msgs/Odometry); ``/mrexplore/round``
+  (``[round, sec, nanosec]``, as std_msgs/UInt32MultiArray: the centre asks for round r's maps, taken no
+  earlier than that stamp; ``0, 0``: whatever the robot holds); ``/mrexplore/NAME/reply``
+  (std_msgs/UInt32MultiArray ``[round, kind]``, kind :data:`ACK` or
   :data:`WHOLE_MAP`).
 - out: ``/mrexplore/NAME/frontiers`` (std_msgs/UInt8MultiArray): the robot's sparse frontier map, a delta
   against what the centre acknowledged or the whole map, in the team's grid.
@@ -30,16 +32,16 @@ from mrexplore.preprocessing.agents import RobotAgent
 from mrexplore.preprocessing.sparse_codec import decode
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap
 from mrexplore.preprocessing.transmission import Outgoing
+from mrexplore.ros2.deployment import POSE_TYPES, RobotEntry
 from mrexplore.ros2.messages import bytes_message, grid_data, pose_xyyaw
 from mrexplore.types import MrExploreError
 
-__all__ = ["RobotNodeSettings", "RobotNode", "run_robot_node", "ACK", "WHOLE_MAP", "POSE_TYPES"]
+__all__ = ["RobotNodeSettings", "RobotNode", "run_robot_node", "start_rclpy", "ACK", "WHOLE_MAP"]
 
 ACK = 0
 """Reply kind: the centre holds the robot's message of that round."""
 WHOLE_MAP = 1
 """Reply kind: the centre lacks the delta's base; send the whole map."""
-POSE_TYPES = ("pose_with_covariance", "odometry")
 
 
 @dataclass(frozen=True)
@@ -55,6 +57,12 @@ class RobotNodeSettings:
     pose_type: str = "pose_with_covariance"
     preprocess: PreprocessConfig = PreprocessConfig()
     thresholds: GridThresholds = GridThresholds()
+    entry: RobotEntry | None = None
+    """The robot's entry in a deployment file (its topics); None: the default topics of ``name``."""
+
+    @property
+    def topics(self) -> RobotEntry:
+        return self.entry if self.entry is not None else RobotEntry(self.name, self.index)
 
     def __post_init__(self) -> None:
         if self.pose_type not in POSE_TYPES:
@@ -68,7 +76,7 @@ class RobotNode:
         from geometry_msgs.msg import PoseWithCovarianceStamped
         from nav_msgs.msg import OccupancyGrid, Odometry
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-        from std_msgs.msg import UInt8MultiArray, UInt32, UInt32MultiArray
+        from std_msgs.msg import UInt8MultiArray, UInt32MultiArray
 
         self.node, self.settings = node, settings
         team = settings.team
@@ -78,16 +86,19 @@ class RobotNode:
         self._sent: tuple[int, Outgoing, SparseFrontierMap] | None = None
         """The round answered last, its messages and the one sent (what an acknowledgement confirms)."""
         self._sent_bytes = b""
-        name = settings.name
+        self._map_stamp = self._pose_stamp = (-1, -1)
+        self._asked: tuple[int, tuple[int, int]] | None = None
+        """The round asked for and not answered yet, and the stamp its map and pose must have."""
+        topics = settings.topics
         latched = QoSProfile(
             depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
         )
-        node.create_subscription(OccupancyGrid, f"/{name}/map", self._on_map, latched)
+        node.create_subscription(OccupancyGrid, topics.map_topic, self._on_map, latched)
         pose_msg = PoseWithCovarianceStamped if settings.pose_type == "pose_with_covariance" else Odometry
-        node.create_subscription(pose_msg, f"/{name}/pose", self._on_pose, 10)
-        node.create_subscription(UInt32, "/mrexplore/round", self._on_round, 10)
-        node.create_subscription(UInt32MultiArray, f"/mrexplore/{name}/reply", self._on_reply, 10)
-        self._out = node.create_publisher(UInt8MultiArray, f"/mrexplore/{name}/frontiers", 10)
+        node.create_subscription(pose_msg, topics.pose_topic, self._on_pose, 10)
+        node.create_subscription(UInt32MultiArray, "/mrexplore/round", self._on_round, 10)
+        node.create_subscription(UInt32MultiArray, topics.reply_topic, self._on_reply, 10)
+        self._out = node.create_publisher(UInt8MultiArray, topics.frontiers_topic, 10)
 
     def _warn(self, text: str) -> None:
         self.node.get_logger().warning(text)
@@ -101,6 +112,8 @@ class RobotNode:
             return
         self.agent.sense_state(state)
         self.has_map = True
+        self._map_stamp = (int(msg.header.stamp.sec), int(msg.header.stamp.nanosec))
+        self._answer()
 
     def _on_pose(self, msg: Any) -> None:
         x, y, yaw = pose_xyyaw(msg.pose.pose)
@@ -113,11 +126,25 @@ class RobotNode:
             self._warn(f"pose dropped: ({xy[0]:.2f}, {xy[1]:.2f}) m lies outside the team's grid")
             return
         self.position_rc = rc
+        self._pose_stamp = (int(msg.header.stamp.sec), int(msg.header.stamp.nanosec))
+        self._answer()
 
     def _on_round(self, msg: Any) -> None:
-        if self.position_rc is None or not self.has_map:
+        values = [int(v) for v in msg.data]
+        if len(values) != 3:
+            self._warn(f"round dropped: {values} is not [round, sec, nanosec]")
+            return
+        self._asked = (values[0], (values[1], values[2]))
+        self._answer()
+
+    def _answer(self) -> None:
+        """Answer the round asked for once the robot holds a map and a pose of its stamp or later."""
+        if self._asked is None or self.position_rc is None or not self.has_map:
             return  # nothing to send before the robot's first map and pose
-        round_ = int(msg.data)
+        round_, stamp = self._asked
+        if self._map_stamp < stamp or self._pose_stamp < stamp:
+            return  # the world of that round is still on its way
+        self._asked = None
         if self._sent is not None and self._sent[0] == round_:
             self._out.publish(bytes_message(self._sent_bytes))  # asked again: the same answer
             return
@@ -142,18 +169,18 @@ class RobotNode:
             self._warn(f"reply dropped: kind {values[1]} is neither {ACK} (ack) nor {WHOLE_MAP} (whole map)")
 
 
-def run_robot_node(settings: RobotNodeSettings, loopback: bool = True) -> None:
-    """Start the robot's node and serve until interrupted (SIGINT or SIGTERM). ``loopback``: keep DDS on this
-    machine (:func:`~mrexplore.ros2.loopback.keep_on_loopback`, with the domain already set where it is)."""
+def start_rclpy(loopback: bool = True) -> Any:
+    """rclpy, initialised for a node that takes SIGINT and SIGTERM itself (both raise KeyboardInterrupt in
+    its bounded spins). ``loopback``: keep DDS on this machine first
+    (:func:`~mrexplore.ros2.loopback.keep_on_loopback`, with the domain already set where it is)."""
     import os
+    import signal
 
     if loopback:
         from mrexplore.ros2.loopback import keep_on_loopback
 
         domain = os.environ.get("ROS_DOMAIN_ID")
         keep_on_loopback(int(domain) if domain and domain.isdigit() else None)
-    import signal
-
     import rclpy
     from rclpy.signals import SignalHandlerOptions
 
@@ -164,6 +191,14 @@ def run_robot_node(settings: RobotNodeSettings, loopback: bool = True) -> None:
     # hanging in about half the runs of the middleware test under load.
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     signal.signal(signal.SIGTERM, stop)
+    signal.signal(signal.SIGINT, stop)
+    return rclpy
+
+
+def run_robot_node(settings: RobotNodeSettings, loopback: bool = True) -> None:
+    """Start the robot's node and serve until interrupted (SIGINT or SIGTERM). ``loopback``: keep DDS on this
+    machine."""
+    rclpy = start_rclpy(loopback)
     node = rclpy.create_node(f"mrexplore_{settings.name}")
     try:
         RobotNode(node, settings)

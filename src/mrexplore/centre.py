@@ -1,0 +1,209 @@
+"""The computing centre of a real team as a plain object: the robots' messages merged into the team map
+(:class:`~mrexplore.preprocessing.agents.TeamCentre`), layers 1-3 of any strategy on it, and the goals kept
+between decisions as a robot's navigation reports on them. ``mrexplore ros2 centre`` is a thin adapter around
+it; it imports no ROS.
+
+A robot's goal ends when its navigation reports it reached (a goal it stood on that still borders unknown
+space stops being a candidate, as in the simulator), aborted (the area around it is kept from every robot
+for ``blacklist_s``, as explore_lite's blacklist does), or when the goal no longer borders unknown space on
+the team map; the robot then moves on to the next target of its local route that still does, and only
+with none left does it ask for a decision. The whole team is re-assigned when a robot asks, and at least
+every ``replan_s``; a robot whose goal the new decision keeps is not sent it again. A robot the centre has
+not heard for ``silence_rounds`` rounds gets no goal; its map stays. After a restart (a new object), the
+robots' deltas are refused and their whole maps rebuild everything.
+
+Examples
+--------
+>>> from mrexplore.pipeline import make_strategy
+>>> from mrexplore.preprocessing.agents import RobotAgent
+>>> from mrexplore.config import SensorConfig
+>>> from mrexplore.types import CellState
+>>> strategy = make_strategy("nearest")
+>>> planner = TeamPlanner(1, (12, 12), 0.1, strategy, silence_rounds=3, blacklist_radius_m=0.2)
+>>> state = np.full((12, 12), CellState.UNKNOWN, np.uint8); state[2:8, 2:8] = CellState.FREE
+>>> robot = RobotAgent(0, (12, 12), strategy.preprocess, SensorConfig()); robot.sense_state(state)
+>>> planner.receive(decode_message(robot.compose(0, (4, 4), robot.window()).incremental()), 0)
+>>> planner.plan(0, now=0.0)  # the goal to send robot 0
+{0: array([2, 3], dtype=int32)}
+>>> planner.navigation(0, NavState.ABORTED, now=1.0)  # its navigation gave up: the area is barred a while
+>>> planner.plan(0, now=1.0), planner.aborts  # another goal at once, outside the barred square
+({0: array([5, 2], dtype=int32)}, 1)
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mrexplore.pipeline import NO_GOAL, NO_ROUTE, Decision, DecisionInput, ExplorationPipeline
+from mrexplore.preprocessing.agents import TeamCentre
+from mrexplore.preprocessing.sparse_codec import decode as decode_message
+from mrexplore.preprocessing.sparse_map import SparseFrontierMap
+from mrexplore.types import BoolGrid, CellState, MrExploreError
+
+__all__ = ["TeamPlanner", "NavState", "decode_message"]
+
+
+class NavState:
+    """What a robot's navigation last said of its goal."""
+
+    IDLE = "idle"
+    SENT = "sent"
+    ACTIVE = "active"
+    REACHED = "reached"
+    ABORTED = "aborted"
+
+
+class TeamPlanner:
+    """The centre's work between the messages in and the goals out (module docstring).
+
+    Parameters
+    ----------
+    blacklist_radius_m:
+        Half the side of the square kept from the robots around an aborted goal.
+    """
+
+    def __init__(
+        self,
+        n_robots: int,
+        shape: tuple[int, int],
+        resolution_m: float,
+        strategy: ExplorationPipeline,
+        silence_rounds: int = 3,
+        blacklist_s: float = 30.0,
+        replan_s: float = 10.0,
+        blacklist_radius_m: float = 0.5,
+        seed: int = 0,
+    ) -> None:
+        if strategy.name == "oracle":
+            raise MrExploreError("the oracle needs the ground truth, which a real team lacks; pick another strategy")
+        self.strategy = strategy
+        self.resolution_m = resolution_m
+        self.team = TeamCentre(n_robots, shape, strategy.preprocess.closing_size_cells, silence_rounds)
+        self.blacklist_s, self.replan_s = blacklist_s, replan_s
+        self._radius = max(1, round(blacklist_radius_m / resolution_m))
+        self.goals = np.tile(NO_GOAL, (n_robots, 1))
+        """``(n_robots, 2) int32`` each robot's goal in the team grid ((-1, -1): none)."""
+        self.routes: list[NDArray[np.int32]] = [NO_ROUTE] * n_robots
+        """Each robot's targets after its goal (the local layer's route)."""
+        self.nav = [NavState.IDLE] * n_robots
+        self.starts = np.full((n_robots, 2), -1, dtype=np.int32)
+        """``(n_robots, 2) int32`` each robot's cell in its first message (its way home)."""
+        self._stood = np.zeros(shape, dtype=bool)
+        self._barred_until = np.zeros(shape, dtype=np.float64)
+        self._last_decision = -np.inf
+        self.rng = np.random.default_rng(seed)
+        self.decision: Decision | None = None
+        self.done_reason: str | None = None
+        self.aborts = 0
+        """Goals the robots' navigation aborted."""
+        self.decisions = 0
+
+    # -- messages in ------------------------------------------------------------------------------------
+    def accepts(self, message: SparseFrontierMap) -> bool:
+        return self.team.accepts(message)
+
+    def receive(self, message: SparseFrontierMap, round_: int) -> None:
+        """Apply a message :meth:`accepts`, heard in ``round_``."""
+        self.team.receive(message, round_)
+        if self.starts[message.robot, 0] < 0:
+            self.starts[message.robot] = message.position_rc
+
+    # -- what the robots' navigation says ---------------------------------------------------------------
+    def navigation(self, robot: int, state: str, now: float) -> None:
+        """Robot ``robot``'s navigation says ``state`` (:class:`NavState`) of its current goal."""
+        goal = self.goals[robot]
+        if goal[0] < 0 or self.nav[robot] in (NavState.REACHED, NavState.ABORTED):
+            return
+        self.nav[robot] = state
+        if state == NavState.ABORTED:
+            r, (g0, g1) = self._radius, goal
+            self._barred_until[max(0, g0 - r) : g0 + r + 1, max(0, g1 - r) : g1 + r + 1] = now + self.blacklist_s
+            self.aborts += 1
+            self._drop(robot)
+        elif state == NavState.REACHED:
+            if self.team.frontiers().un_mask[goal[0], goal[1]]:
+                self._stood[goal[0], goal[1]] = True  # stood on it and it stayed a frontier
+            self._drop(robot)
+
+    def _drop(self, robot: int) -> None:
+        self.goals[robot] = NO_GOAL
+        self.routes[robot] = NO_ROUTE
+
+    def blacklist(self, now: float) -> BoolGrid:
+        """``(H, W) bool`` cells that are not candidates at ``now``."""
+        return self._stood | (self._barred_until > now)
+
+    # -- decisions -------------------------------------------------------------------------------------
+    def assignable(self, round_: int) -> NDArray[np.int64]:
+        """The robots the centre may assign to after ``round_`` (heard recently, cell known)."""
+        return np.flatnonzero(self.team.status(round_).assignable)
+
+    def decision_input(
+        self,
+        round_: int,
+        blacklist: BoolGrid,
+        current: Sequence[NDArray[np.int32]],
+        rng: np.random.Generator,
+        active: NDArray[np.int64],
+    ) -> DecisionInput:
+        """What the strategy decides on after ``round_``: the team map, the ``active`` robots' cells,
+        the blacklist and their current routes."""
+        return DecisionInput(
+            self.team.state(),
+            self.team.positions_rc[active],
+            self.resolution_m,
+            blacklist,
+            current,
+            rng,
+            self.team.frontiers(),
+        )
+
+    def plan(self, round_: int, now: float | None = None, force: bool = False) -> dict[int, NDArray[np.int32]]:
+        """After ``round_``'s messages: move robots on along their routes, decide where a robot asks or
+        ``replan_s`` passed (or ``force``); returns the goals to send, ``{robot: (r, c)}``. Sets
+        :attr:`done_reason` when no reachable cluster is left."""
+        now = time.monotonic() if now is None else now
+        active = self.assignable(round_)
+        un_mask = self.team.frontiers().un_mask
+        blacklist = self.blacklist(now)
+        sent: dict[int, NDArray[np.int32]] = {}
+        need = force or now - self._last_decision >= self.replan_s
+        for i in map(int, active):
+            goal = self.goals[i]
+            if goal[0] >= 0 and not un_mask[goal[0], goal[1]]:
+                self._drop(i)  # seen: the next target of its route that still borders unknown space
+                route = self.routes[i]
+                keep = [k for k, t in enumerate(route) if un_mask[t[0], t[1]] and not blacklist[t[0], t[1]]]
+                if keep:
+                    self.goals[i], self.routes[i] = route[keep[0]], route[keep[0] + 1 :]
+                    self.nav[i] = NavState.SENT
+                    sent[i] = self.goals[i].copy()
+            need |= self.goals[i, 0] < 0
+        if not need or len(active) == 0:
+            return sent
+        current = [
+            np.vstack([self.goals[i : i + 1], self.routes[i]]) if self.goals[i, 0] >= 0 else NO_ROUTE
+            for i in map(int, active)
+        ]
+        decision = self.strategy.decide(self.decision_input(round_, blacklist, current, self.rng, active))
+        self.decision, self._last_decision = decision, now
+        self.decisions += 1
+        if decision.done_reason is not None:
+            self.done_reason = decision.done_reason
+            return sent
+        for j, i in enumerate(map(int, active)):
+            goal = decision.goals_rc[j]
+            if goal[0] < 0 or np.array_equal(goal, self.goals[i]):
+                continue  # nothing for it, or its goal kept: Nav2 drives on
+            self.goals[i], self.routes[i] = goal.copy(), decision.routes[j][1:]
+            self.nav[i] = NavState.SENT
+            sent[i] = goal.copy()
+        return sent
+
+    def free(self) -> BoolGrid:
+        """``(H, W) bool`` free cells of the team map."""
+        return self.team.state() == CellState.FREE

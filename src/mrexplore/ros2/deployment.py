@@ -1,0 +1,222 @@
+"""A team's deployment as one YAML file, read by every ``mrexplore ros2`` node: the team's grid, each robot's
+name, frame offset, frame id and topics, and the centre's timing. Plain data, no ROS.
+
+Example file (every field but ``robots`` has a default; a robot given as a bare name takes the defaults)::
+
+    team_frame: map                # the frame of the team map and the markers
+    team_grid: {x0: -20.0, y0: -20.0, width: 40.0, height: 40.0, resolution: 0.1}
+    round_period_s: 1.0            # the centre asks for the robots' maps this often (real time)
+    round_timeout_s: 0.5           # and decides on what arrived within this
+    lost_after_s: 5.0              # a robot silent this long gets no goal (its map stays)
+    blacklist_s: 30.0              # an aborted goal's area is kept from the robots this long
+    replan_s: 10.0                 # a full decision at least this often
+    reliable: true                 # QoS of the frontier messages (false: best effort)
+    robots:
+      - name: robot1
+        offset: [0.0, 0.0, 0.0]    # x, y (m), yaw (rad) of its map frame in the team frame
+        frame: map                 # the frame of its goals (default: map)
+        pose_type: pose_with_covariance   # or odometry
+        map_topic: /robot1/map     # defaults: /NAME/map, /NAME/pose, /NAME/goal_pose,
+        pose_topic: /robot1/pose   #           /NAME/navigate_to_pose/_action/status
+      - robot2
+
+Examples
+--------
+>>> d = Deployment.from_dict({"robots": ["robot1", {"name": "robot2", "offset": [1.0, 0.0, 0.0]}]})
+>>> [r.name for r in d.robots], d.robots[1].offset.x_m, d.robots[0].goal_topic
+(['robot1', 'robot2'], 1.0, '/robot1/goal_pose')
+>>> try:
+...     Deployment.from_dict({"robots": ["robot1", "robot1"]})
+... except MrExploreError as exc:
+...     print(exc)
+deployment names robot 'robot1' twice; give each robot its own name
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+from mrexplore.maps.frame import GridFrame
+from mrexplore.maps.occupancy_grid import FrameOffset
+from mrexplore.types import MrExploreError
+
+__all__ = ["Deployment", "RobotEntry", "TeamGrid", "read_deployment", "POSE_TYPES"]
+
+POSE_TYPES = ("pose_with_covariance", "odometry")
+_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
+
+
+@dataclass(frozen=True)
+class TeamGrid:
+    """The team's grid in the team frame: its lower-left corner, size (metres) and cell size."""
+
+    x0: float = -25.0
+    y0: float = -25.0
+    width: float = 50.0
+    height: float = 50.0
+    resolution: float = 0.1
+
+    def frame(self, max_cells: int) -> GridFrame:
+        """The grid's :class:`GridFrame`; one line naming the problem where it has no cells or too many."""
+        for key in ("x0", "y0", "width", "height", "resolution"):
+            if not math.isfinite(getattr(self, key)):
+                raise MrExploreError(f"team grid {key} must be a finite number, got {getattr(self, key)}")
+        if self.width <= 0 or self.height <= 0 or self.resolution <= 0:
+            raise MrExploreError(
+                f"team grid must have a size and a cell size > 0, got {self.width} x {self.height} m at "
+                f"{self.resolution} m"
+            )
+        h, w = math.ceil(self.height / self.resolution), math.ceil(self.width / self.resolution)
+        if h * w > max_cells:
+            raise MrExploreError(
+                f"team grid holds {h * w:,} cells at {self.resolution} m, more than {max_cells:,} (map.max_cells); "
+                "use coarser cells or a smaller grid"
+            )
+        return GridFrame(h, w, self.resolution, (self.x0, self.y0))
+
+
+@dataclass(frozen=True)
+class RobotEntry:
+    """One robot of the deployment: its name, index (its place in the list), frame and topics."""
+
+    name: str
+    index: int
+    offset: FrameOffset = FrameOffset()
+    frame: str = "map"
+    pose_type: str = "pose_with_covariance"
+    map_topic: str = ""
+    pose_topic: str = ""
+    goal_topic: str = ""
+    nav_status_topic: str = ""
+
+    def __post_init__(self) -> None:
+        defaults = {
+            "map_topic": f"/{self.name}/map",
+            "pose_topic": f"/{self.name}/pose",
+            "goal_topic": f"/{self.name}/goal_pose",
+            "nav_status_topic": f"/{self.name}/navigate_to_pose/_action/status",
+        }
+        for key, value in defaults.items():
+            if not getattr(self, key):
+                object.__setattr__(self, key, value)
+
+    @property
+    def frontiers_topic(self) -> str:
+        return f"/mrexplore/{self.name}/frontiers"
+
+    @property
+    def reply_topic(self) -> str:
+        return f"/mrexplore/{self.name}/reply"
+
+
+@dataclass(frozen=True)
+class Deployment:
+    """What the nodes of one team share (module docstring)."""
+
+    robots: tuple[RobotEntry, ...]
+    team_frame: str = "map"
+    team_grid: TeamGrid = field(default_factory=TeamGrid)
+    round_period_s: float = 1.0
+    round_timeout_s: float = 0.5
+    lost_after_s: float = 5.0
+    blacklist_s: float = 30.0
+    replan_s: float = 10.0
+    reliable: bool = True
+
+    def robot(self, name: str) -> RobotEntry:
+        """The entry of robot ``name``; one line naming the team's robots where it has none."""
+        for r in self.robots:
+            if r.name == name:
+                return r
+        raise MrExploreError(
+            f"robot {name!r} is not in the deployment; its robots: {', '.join(r.name for r in self.robots)}"
+        )
+
+    @classmethod
+    def from_dict(cls, data: Any, what: str = "deployment") -> Deployment:
+        if not isinstance(data, dict):
+            raise MrExploreError(f"{what} must be a YAML mapping of settings, got {type(data).__name__}")
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise MrExploreError(f"{what} has unknown setting {unknown[0]!r}; known: {', '.join(sorted(known))}")
+        raw_robots = data.get("robots")
+        if not isinstance(raw_robots, list) or not raw_robots:
+            raise MrExploreError(f"{what} must list its robots: robots: [robot1, robot2]")
+        robots = tuple(_robot(entry, i, what) for i, entry in enumerate(raw_robots))
+        names = [r.name for r in robots]
+        for name in names:
+            if names.count(name) > 1:
+                raise MrExploreError(f"{what} names robot {name!r} twice; give each robot its own name")
+        grid_data = data.get("team_grid", {})
+        if not isinstance(grid_data, dict) or set(grid_data) - {f.name for f in fields(TeamGrid)}:
+            raise MrExploreError(f"{what}: team_grid takes x0, y0, width, height, resolution (metres)")
+        kwargs: dict[str, Any] = {}
+        for key in ("round_period_s", "round_timeout_s", "lost_after_s", "blacklist_s", "replan_s"):
+            if key in data:
+                value = _number(data[key], key, what)
+                if value <= 0:
+                    raise MrExploreError(f"{what}: {key} must be > 0 seconds, got {value}")
+                kwargs[key] = value
+        if "reliable" in data:
+            if not isinstance(data["reliable"], bool):
+                raise MrExploreError(f"{what}: reliable must be true or false, got {data['reliable']!r}")
+            kwargs["reliable"] = data["reliable"]
+        if "team_frame" in data:
+            kwargs["team_frame"] = str(data["team_frame"])
+        team_grid = TeamGrid(**{k: _number(v, f"team_grid.{k}", what) for k, v in grid_data.items()})
+        return cls(robots, team_grid=team_grid, **kwargs)
+
+    @classmethod
+    def of_names(cls, names: list[str], team_grid: TeamGrid, **kwargs: Any) -> Deployment:
+        """A deployment of robots sharing one frame, with the default topics."""
+        return cls.from_dict({"robots": names, "team_grid": team_grid.__dict__, **kwargs})
+
+
+def _number(value: Any, key: str, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise MrExploreError(f"{what}: {key} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _robot(entry: Any, index: int, what: str) -> RobotEntry:
+    if isinstance(entry, str):
+        entry = {"name": entry}
+    if not isinstance(entry, dict) or "name" not in entry:
+        raise MrExploreError(f"{what}: robot {index + 1} must be a name or a mapping with a name")
+    name = str(entry["name"])
+    if not _NAME.match(name):
+        raise MrExploreError(f"{what}: robot name {name!r} must be letters, digits and _ (a ROS name), from a letter")
+    allowed = {f.name for f in fields(RobotEntry)} - {"index"}
+    unknown = sorted(set(entry) - allowed)
+    if unknown:
+        raise MrExploreError(
+            f"{what}: robot {name} has unknown setting {unknown[0]!r}; known: {', '.join(sorted(allowed))}"
+        )
+    kwargs = {k: v for k, v in entry.items() if k not in ("name", "offset")}
+    for key, value in kwargs.items():
+        if not isinstance(value, str):
+            raise MrExploreError(f"{what}: robot {name}'s {key} must be text, got {value!r}")
+    if kwargs.get("pose_type", POSE_TYPES[0]) not in POSE_TYPES:
+        raise MrExploreError(
+            f"{what}: robot {name}'s pose_type must be one of {', '.join(POSE_TYPES)}, got {kwargs['pose_type']!r}"
+        )
+    offset = entry.get("offset", [0.0, 0.0, 0.0])
+    if not isinstance(offset, list) or len(offset) != 3:
+        raise MrExploreError(f"{what}: robot {name}'s offset must be [x, y, yaw] (metres, radians), got {offset!r}")
+    x, y, yaw = (_number(v, f"robot {name}'s offset", what) for v in offset)
+    return RobotEntry(name, index, FrameOffset(x, y, yaw), **kwargs)
+
+
+def read_deployment(path: str | Path) -> Deployment:
+    """The :class:`Deployment` of a YAML file; any problem is one line naming the file."""
+    from mrexplore.safe_yaml import load_yaml_file
+
+    p = Path(path)
+    if not p.is_file():
+        raise MrExploreError(f"deployment file {p} not found; docs/ros2.md shows one")
+    return Deployment.from_dict(load_yaml_file(p, f"deployment file {p}"), f"deployment file {p}")
