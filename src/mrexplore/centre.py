@@ -193,8 +193,9 @@ class TeamPlanner:
         self.decision, self._last_decision = decision, now
         self.decisions += 1
         if decision.done_reason is not None:
-            self.done_reason = decision.done_reason
-            return sent
+            if not (self._barred_until > now).any():
+                self.done_reason = decision.done_reason
+            return sent  # only aborted goals' areas are left: they are tried again once their time is up
         for j, i in enumerate(map(int, active)):
             goal = decision.goals_rc[j]
             if goal[0] < 0 or np.array_equal(goal, self.goals[i]):

@@ -372,7 +372,7 @@ class CentreNode:
                 if state is not None:
                     self.planner.navigation(i, state, time.monotonic())
                     if state != NavState.ACTIVE:
-                        self._force = True
+                        self._next_round = 0.0  # a robot is free: a round now, not at the next tick of the period
             elif gid not in self._known_ids[i] and gid not in self._warned_ids:
                 self._warned_ids.add(gid)
                 self._warn(f"navigation status of {self.robots[i].name} for unknown goal {gid.hex()[:8]} dropped")

@@ -25,6 +25,10 @@ Examples
 >>> d = Deployment.from_dict({"robots": ["robot1", {"name": "robot2", "offset": [1.0, 0.0, 0.0]}]})
 >>> [r.name for r in d.robots], d.robots[1].offset.x_m, d.robots[0].goal_topic
 (['robot1', 'robot2'], 1.0, '/robot1/goal_pose')
+>>> Deployment.from_dict(d.to_dict()) == d
+True
+>>> TeamGrid(0.0, 0.0, 10.9, 8.5, 0.1).frame(10**6).height  # not ceil(85.00000000000001)
+85
 >>> try:
 ...     Deployment.from_dict({"robots": ["robot1", "robot1"]})
 ... except MrExploreError as exc:
@@ -70,7 +74,8 @@ class TeamGrid:
                 f"team grid must have a size and a cell size > 0, got {self.width} x {self.height} m at "
                 f"{self.resolution} m"
             )
-        h, w = math.ceil(self.height / self.resolution), math.ceil(self.width / self.resolution)
+        # Rounded first: 8.5 m at 0.1 m is 85 cells, not the 86 of ceil(85.00000000000001).
+        h, w = (math.ceil(round(extent / self.resolution, 6)) for extent in (self.height, self.width))
         if h * w > max_cells:
             raise MrExploreError(
                 f"team grid holds {h * w:,} cells at {self.resolution} m, more than {max_cells:,} (map.max_cells); "
@@ -170,6 +175,25 @@ class Deployment:
             kwargs["team_frame"] = str(data["team_frame"])
         team_grid = TeamGrid(**{k: _number(v, f"team_grid.{k}", what) for k, v in grid_data.items()})
         return cls(robots, team_grid=team_grid, **kwargs)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The deployment as :meth:`from_dict` reads it (a deployment file's contents)."""
+        robots = [
+            {
+                "name": r.name,
+                "offset": [r.offset.x_m, r.offset.y_m, r.offset.yaw_rad],
+                **{k: getattr(r, k) for k in ("frame", "pose_type", "map_topic", "pose_topic", "goal_topic")},
+                "nav_status_topic": r.nav_status_topic,
+            }
+            for r in self.robots
+        ]
+        timing = ("round_period_s", "round_timeout_s", "lost_after_s", "blacklist_s", "replan_s", "reliable")
+        return {
+            "team_frame": self.team_frame,
+            "team_grid": dict(self.team_grid.__dict__),
+            **{k: getattr(self, k) for k in timing},
+            "robots": robots,
+        }
 
     @classmethod
     def of_names(cls, names: list[str], team_grid: TeamGrid, **kwargs: Any) -> Deployment:

@@ -15,8 +15,11 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
+
+import yaml
 
 from mrexplore.config import RunConfig, config_yaml
 from mrexplore.mission import MissionSpec
@@ -75,19 +78,23 @@ def launch_team(
     work = Path(tempfile.mkdtemp(prefix="mrexplore_launch_"))
     config = work / "config.yaml"
     config.write_text(config_yaml(run))
+    # The centre's clock follows the simulation's: a round every two steps, a full decision as often as the
+    # simulator's own replanning.
+    period = max(0.05, 2.0 / args.speed)
+    deployment = replace(
+        deployment,
+        team_grid=grid,
+        round_period_s=period,
+        round_timeout_s=period,
+        replan_s=spec.mission_cfg.replan_every_steps / args.speed,
+    )
+    team_file = work / "deployment.yaml"
+    team_file.write_text(yaml.safe_dump(deployment.to_dict(), sort_keys=False))
     me = [sys.executable, "-m", "mrexplore"]
-    team = [
-        "--team-grid",
-        f"{grid.x0},{grid.y0},{grid.width},{grid.height}",
-        "--resolution",
-        str(grid.resolution),
-        "--config",
-        str(config),
-    ]
+    team = ["--deployment", str(team_file), "--config", str(config)]
     if args.network:
         team.append("--network")
-    names = ",".join(r.name for r in deployment.robots)
-    centre_cmd = [*me, "ros2", "centre", "--robots", names, "--strategy", args.strategy, "--seed", str(args.seed)]
+    centre_cmd = [*me, "ros2", "centre", "--strategy", args.strategy, "--seed", str(args.seed)]
     centre_cmd += ["--record", str(work / "centre.json"), *team]
     if args.policy:
         centre_cmd += ["--policy", args.policy]
@@ -111,7 +118,7 @@ def launch_team(
         start(centre_cmd, "centre")
         if not args.direct_maps:
             for r in deployment.robots:
-                start([*me, "ros2", "robot", "--name", r.name, "--index", str(r.index), *team], r.name)
+                start([*me, "ros2", "robot", "--name", r.name, *team], r.name)
         sim = start([*me, *_sim_argv(argv)], "sim", stdout=subprocess.PIPE)
         print(
             f"launched: sim, {'no robot nodes' if args.direct_maps else f'{len(deployment.robots)} robot nodes'}, "

@@ -5,7 +5,7 @@ Each simulated robot publishes its belief as its map (``/NAME/map``, nav_msgs/Oc
 and its pose (``/NAME/pose``, geometry_msgs/PoseWithCovarianceStamped), in the team frame.
 
 - In real time (the default) it stands in for Nav2 too: it follows the goals on ``/NAME/goal_pose`` along
-  the shortest path through the cells its own map holds free, advancing ``speed`` simulation steps a
+  the shortest path through the cells its own map does not hold occupied, advancing ``speed`` simulation steps a
   second, and publishes the action status Nav2 would on ``/NAME/navigate_to_pose/_action/status``
   (executing, then succeeded; aborted when no path is known or the way turns out blocked). It ends when the
   centre's status says the exploration finished, or at ``max_steps``.
@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mrexplore.mission import Mission, MissionResult, MissionSpec
 from mrexplore.paths.astar import astar_path
@@ -38,6 +39,8 @@ from mrexplore.types import CellState, MrExploreError
 __all__ = ["SimSettings", "SimNode", "run_sim_node"]
 
 _REQUEST_AGAIN_S = 2.0
+_FIRST_GOALS_S = 60.0
+"""Real time: the simulation starts once every robot has a goal, or after this long."""
 _STATUS = {"executing": 2, "succeeded": 4, "aborted": 6}
 
 
@@ -105,6 +108,7 @@ class SimNode:
         self._goal_ids: list[bytes | None] = [None] * n
         self._goal_stamps: list[Any] = [None] * n
         self._nav: list[str | None] = [None] * n
+        self._goal_rc: list[tuple[int, int]] = [(-1, -1)] * n
         self.curve = [self.mission.sim.coverage]
 
     # -- the world as the robots publish it -------------------------------------------------------------
@@ -181,16 +185,29 @@ class SimNode:
         goal = self.frame.xy_to_rc((float(x), float(y)))
         self._goal_ids[i] = os.urandom(16)
         self._goal_stamps[i] = self.node.get_clock().now().to_msg()
-        here = (int(sim.positions_rc[i, 0]), int(sim.positions_rc[i, 1]))
-        path = np.zeros((0, 2), np.int32)
-        if self.frame.contains(goal):
-            belief = sim.beliefs[i]
-            passable = classify(belief.log_odds, belief.observed, self.settings.spec.sim_cfg.sensor) == CellState.FREE
-            passable[here] = True
-            path = astar_path(passable, here, goal)
+        self._goal_rc[i] = goal
+        path = self._plan(i) if self.frame.contains(goal) else np.zeros((0, 2), np.int32)
         sim.set_path(i, path)
         self._nav[i] = "executing" if len(path) else "aborted"
         self._publish_nav(i)
+
+    def _plan(self, i: int) -> NDArray[np.int32]:
+        """Robot i's path to its goal as Nav2 would find it on the robot's own map: through the cells it
+        holds free, else through unknown space too (``allow_unknown``); empty where neither leads there."""
+        sim = self.mission.sim
+        belief = sim.beliefs[i]
+        own = classify(belief.log_odds, belief.observed, self.settings.spec.sim_cfg.sensor)
+        here = (int(sim.positions_rc[i, 0]), int(sim.positions_rc[i, 1]))
+        goal = self._goal_rc[i]
+        for passable in (own == CellState.FREE, own != CellState.OCCUPIED):
+            passable[here] = True
+            path = astar_path(passable, here, goal)
+            if len(path):
+                return path
+        return np.zeros((0, 2), np.int32)
+
+    def every_robot_has_a_goal(self) -> bool:
+        return all(nav is not None for nav in self._nav)
 
     def _publish_nav(self, i: int) -> None:
         from action_msgs.msg import GoalStatus
@@ -215,8 +232,10 @@ class SimNode:
             if self._nav[i] != "executing":
                 continue
             if result.blocked[i] or sim.path_ahead_blocked(i):
-                sim.set_path(i, np.zeros((0, 2), np.int32))
-                self._nav[i] = "aborted"
+                path = self._plan(i)  # Nav2 plans again around what it just saw; it gives up only without a way
+                sim.set_path(i, path)
+                if not len(path):
+                    self._nav[i] = "aborted"
             elif sim.at_path_end(i):
                 self._nav[i] = "succeeded"
             self._publish_nav(i)
@@ -245,8 +264,15 @@ def run_sim_node(settings: SimSettings, loopback: bool = True) -> dict[str, Any]
                 "starts_rc": result.starts_rc.tolist(),
             }
         sim = sim_node.mission.sim
-        period, next_step = 1.0 / settings.speed, time.monotonic()
+        period = 1.0 / settings.speed
         sim_node.publish_world()
+        t0 = published = time.monotonic()  # the clock starts once every robot has its first goal, or after a while
+        while not sim_node.every_robot_has_a_goal() and time.monotonic() - t0 < _FIRST_GOALS_S:
+            rclpy.spin_once(node, timeout_sec=0.1)
+            if time.monotonic() - published > 1.0:
+                sim_node.publish_world()  # for robot nodes that started late
+                published = time.monotonic()
+        next_step = time.monotonic()
         while _finished(sim_node.centre_status) is None and sim.steps < spec.mission_cfg.max_steps:
             rclpy.spin_once(node, timeout_sec=max(0.0, next_step - time.monotonic()))
             if time.monotonic() >= next_step:
@@ -258,6 +284,7 @@ def run_sim_node(settings: SimSettings, loopback: bool = True) -> dict[str, Any]
             "coverage": float(sim.coverage),
             "done_reason": _finished(sim_node.centre_status) or "max_steps",
             "robots_lost": int((~sim.alive).sum()),
+            "starts_rc": sim_node.mission.starts_rc.tolist(),
         }
     except KeyboardInterrupt:
         raise MrExploreError("the simulation was interrupted") from None
