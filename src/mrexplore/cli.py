@@ -380,8 +380,15 @@ def _add_ros2(sub: Any) -> None:
     si.add_argument("--lockstep", action="store_true", help="advance only once the centre answered each decision")
     si.add_argument("--speed", type=_POSITIVE, default=10.0, help="simulation steps a second in real time (default 10)")
     si.add_argument("--json", action="store_true", help="print the run's record as JSON on stdout")
+    si.add_argument(
+        "--progress-file", default=None, metavar="FILE", help="keep the step and coverage here (JSON), for a launcher"
+    )
     si.add_argument("--network", action="store_true", help="use the system's DDS settings (default: loopback)")
     _add_config_flags(si, "flags override it")
+    rl = kinds.add_parser("relay", help="a lossy link between robots and centre, to try the protocol under loss")
+    rl.add_argument("--loss", type=_LOSS, required=True, metavar="P", help="share of frontier messages dropped")
+    rl.add_argument("--seed", type=_SEED, default=0, help="seed of the drops (default 0)")
+    _add_team_flags(rl)
     la = kinds.add_parser(
         "launch", help="sim, robot nodes and centre as separate processes on this machine (a demo, or a check)"
     )
@@ -428,6 +435,10 @@ def _ros2(args: argparse.Namespace, argv: list[str]) -> str:
     run = read_config_file(args.config) if args.config else RunConfig()
     dep, team = _deployment(args, run)
     loopback = not args.network
+    if args.ros2 == "relay":
+        from mrexplore.ros2.relay import run_relay
+
+        return run_relay(dep, args.loss, args.seed, loopback=loopback)
     if args.ros2 == "robot":
         from mrexplore.maps.occupancy_grid import FrameOffset
         from mrexplore.ros2.robot_node import RobotNodeSettings, run_robot_node
@@ -479,7 +490,9 @@ def _ros2_sim(args: argparse.Namespace, argv: list[str]) -> str:
     if args.ros2 == "sim":
         from mrexplore.ros2.sim_node import SimSettings, run_sim_node
 
-        record = run_sim_node(SimSettings(spec, dep, args.lockstep, args.speed), loopback=not args.network)
+        progress_file = Path(args.progress_file) if args.progress_file else None
+        sim_settings = SimSettings(spec, dep, args.lockstep, args.speed, progress_file=progress_file)
+        record = run_sim_node(sim_settings, loopback=not args.network)
         if args.json:
             print(json.dumps(strict_json(record), allow_nan=False))
         return f"simulation ended: {record['done_reason']} after {record['steps']} steps"

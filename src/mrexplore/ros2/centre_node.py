@@ -261,8 +261,8 @@ class CentreNode:
             self._warn(f"frontier message on {name}'s topic dropped: it names robot {message.robot}, not {i}")
             return
         r, wire = self._round, self.wire[i]
-        if r is None or message.round != r.round:
-            wire.late += 1
+        if r is None or message.round != r.round or i not in r.expected:
+            wire.late += 1  # a round already closed, or a robot not asked (failed, in the simulator's lockstep)
             return
         if i in r.inbox:
             wire.repeats += 1

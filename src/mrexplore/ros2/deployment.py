@@ -97,9 +97,13 @@ class RobotEntry:
     pose_topic: str = ""
     goal_topic: str = ""
     nav_status_topic: str = ""
+    frontiers_topic: str = ""
+    """Where the robot's sparse frontier messages are read (default ``/mrexplore/NAME/frontiers``, where its
+    node publishes them; a relay in between republishes them elsewhere)."""
 
     def __post_init__(self) -> None:
         defaults = {
+            "frontiers_topic": f"/mrexplore/{self.name}/frontiers",
             "map_topic": f"/{self.name}/map",
             "pose_topic": f"/{self.name}/pose",
             "goal_topic": f"/{self.name}/goal_pose",
@@ -108,10 +112,6 @@ class RobotEntry:
         for key, value in defaults.items():
             if not getattr(self, key):
                 object.__setattr__(self, key, value)
-
-    @property
-    def frontiers_topic(self) -> str:
-        return f"/mrexplore/{self.name}/frontiers"
 
     @property
     def reply_topic(self) -> str:
@@ -184,6 +184,7 @@ class Deployment:
                 "offset": [r.offset.x_m, r.offset.y_m, r.offset.yaw_rad],
                 **{k: getattr(r, k) for k in ("frame", "pose_type", "map_topic", "pose_topic", "goal_topic")},
                 "nav_status_topic": r.nav_status_topic,
+                "frontiers_topic": r.frontiers_topic,
             }
             for r in self.robots
         ]

@@ -4,6 +4,11 @@ one machine, talking through ROS 2 (kept on loopback unless ``--network``), ende
 It imports no rclpy itself: it sets the environment (:func:`~mrexplore.ros2.loopback.keep_on_loopback`) that
 its children inherit, starts them, waits for the simulation to end, stops the others (SIGTERM, then SIGKILL
 after a grace period), and merges their records.
+
+explore's faults happen to the processes: ``--robot-failure ID@STEP`` stops the simulated robot and kills its
+robot node at that step; ``--centre-restart STEP`` kills the centre at that step and starts a new one;
+``--message-loss P`` puts a relay (:mod:`~mrexplore.ros2.relay`) between the robots and the centre that drops
+that share of their frontier messages.
 """
 
 from __future__ import annotations
@@ -14,40 +19,77 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import yaml
 
 from mrexplore.config import RunConfig, config_yaml
 from mrexplore.mission import MissionSpec
 from mrexplore.ros2.deployment import Deployment, TeamGrid
+from mrexplore.ros2.relay import relayed_topic
 from mrexplore.types import MrExploreError
 
-__all__ = ["launch_team", "stop_all"]
+__all__ = ["launch_team", "TeamProcesses", "wire_summary"]
 
 _LAUNCH_ONLY = {"--json": 0, "--direct-maps": 0}
 """launch's own flags (and how many values each takes), not passed on to the simulator."""
 _GRACE_S = 10.0
+_RESTART_AFTER_S = 1.0
+"""A killed centre is started again this long after."""
 
 
-def stop_all(processes: list[subprocess.Popen[Any]]) -> None:
-    """End every process still running: SIGTERM, then SIGKILL after a grace period."""
-    for p in processes:
-        if p.poll() is None:
-            p.send_signal(signal.SIGTERM)
-    t0 = time.monotonic()
-    for p in processes:
-        try:
-            p.wait(timeout=max(0.1, _GRACE_S - (time.monotonic() - t0)))
-        except subprocess.TimeoutExpired:
-            p.kill()
-            p.wait()
+class TeamProcesses:
+    """The processes of one launch by name, each with its command and log, started, killed, started again and
+    ended together."""
+
+    def __init__(self, work: Path) -> None:
+        self.work = work
+        self.commands: dict[str, list[str]] = {}
+        self.processes: dict[str, subprocess.Popen[str]] = {}
+        self._logs: list[IO[str]] = []
+        self._lock = threading.Lock()
+
+    def start(self, name: str, cmd: list[str] | None = None, stdout: Any = subprocess.DEVNULL) -> subprocess.Popen[str]:
+        """Start ``cmd`` (default: the command ``name`` ran before) with its stderr in ``name``.log."""
+        with self._lock:
+            cmd = cmd or self.commands[name]
+            log = open(self.work / f"{name}.log", "a")  # noqa: SIM115 - closed in stop_all
+            self._logs.append(log)
+            self.commands[name] = cmd
+            self.processes[name] = p = subprocess.Popen(cmd, stdout=stdout, stderr=log, text=True)
+            return p
+
+    def kill(self, name: str) -> None:
+        """End ``name`` at once, as a crash or a power cut would (SIGKILL)."""
+        with self._lock:
+            p = self.processes[name]
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+
+    def stop_all(self) -> None:
+        """End every process still running: SIGTERM, then SIGKILL after a grace period."""
+        with self._lock:
+            running = [p for p in self.processes.values() if p.poll() is None]
+            for p in running:
+                p.send_signal(signal.SIGTERM)
+            t0 = time.monotonic()
+            for p in running:
+                try:
+                    p.wait(timeout=max(0.1, _GRACE_S - (time.monotonic() - t0)))
+                except subprocess.TimeoutExpired:
+                    p.kill()
+                    p.wait()
+            for log in self._logs:
+                log.close()
+            self._logs.clear()
 
 
-def _sim_argv(argv: list[str]) -> list[str]:
+def _sim_argv(argv: list[str], progress_file: Path) -> list[str]:
     """The user's command line with ``launch`` turned into ``sim`` and launch's own flags removed."""
     out, skip = [], 0
     for k, arg in enumerate(argv):
@@ -58,7 +100,38 @@ def _sim_argv(argv: list[str]) -> list[str]:
             skip = _LAUNCH_ONLY[arg]
             continue
         out.append("sim" if arg == "launch" and k > 0 and argv[k - 1] == "ros2" else arg)
-    return [*out, "--json"]
+    return [*out, "--json", "--progress-file", str(progress_file)]
+
+
+def _sim_step(progress_file: Path) -> int:
+    try:
+        return int(json.loads(progress_file.read_text())["step"])
+    except (OSError, ValueError, KeyError):
+        return -1
+
+
+def _faults(
+    team: TeamProcesses, spec: MissionSpec, names: list[str], progress_file: Path, done: threading.Event
+) -> None:
+    """Strike the mission's scheduled faults at the processes as the simulation reaches their steps."""
+    faults = spec.mission_cfg.faults
+    due = sorted(
+        [(step, "robot", robot) for robot, step in faults.robot_failures]
+        + [(step, "centre", 0) for step in faults.centre_restarts]
+    )
+    while due and not done.is_set():
+        if _sim_step(progress_file) < due[0][0]:
+            time.sleep(0.02)
+            continue
+        step, kind, robot = due.pop(0)
+        if kind == "robot":
+            print(f"step {step}: robot {names[robot]}'s node killed", file=sys.stderr)
+            team.kill(names[robot])
+        else:
+            print(f"step {step}: centre killed; a new one starts in {_RESTART_AFTER_S:.0f} s", file=sys.stderr)
+            team.kill("centre")
+            time.sleep(_RESTART_AFTER_S)
+            team.start("centre")
 
 
 def launch_team(
@@ -88,56 +161,59 @@ def launch_team(
         round_timeout_s=period,
         replan_s=spec.mission_cfg.replan_every_steps / args.speed,
     )
-    team_file = work / "deployment.yaml"
-    team_file.write_text(yaml.safe_dump(deployment.to_dict(), sort_keys=False))
+    loss = spec.mission_cfg.faults.message_loss
+    robots_file, centre_file = work / "deployment.yaml", work / "centre_deployment.yaml"
+    robots_file.write_text(yaml.safe_dump(deployment.to_dict(), sort_keys=False))
+    centre_side = deployment
+    if loss > 0:
+        relayed = tuple(replace(r, frontiers_topic=relayed_topic(r.name)) for r in deployment.robots)
+        centre_side = replace(deployment, robots=relayed)
+    centre_file.write_text(yaml.safe_dump(centre_side.to_dict(), sort_keys=False))
     me = [sys.executable, "-m", "mrexplore"]
-    team = ["--deployment", str(team_file), "--config", str(config)]
-    if args.network:
-        team.append("--network")
+    net = ["--network"] if args.network else []
     centre_cmd = [*me, "ros2", "centre", "--strategy", args.strategy, "--seed", str(args.seed)]
-    centre_cmd += ["--record", str(work / "centre.json"), *team]
+    centre_cmd += ["--record", str(work / "centre.json"), "--deployment", str(centre_file), "--config", str(config)]
+    centre_cmd += net
     if args.policy:
         centre_cmd += ["--policy", args.policy]
-    if args.no_local:
-        centre_cmd.append("--no-local")
-    if args.lockstep:
-        centre_cmd.append("--lockstep")
-    if args.direct_maps:
-        centre_cmd.append("--direct-maps")
-    logs: list[Any] = []
-    processes: list[subprocess.Popen[Any]] = []
-
-    def start(cmd: list[str], name: str, stdout: Any = subprocess.DEVNULL) -> subprocess.Popen[Any]:
-        log = open(work / f"{name}.log", "w")  # noqa: SIM115 - closed with the others at the end
-        logs.append(log)
-        p = subprocess.Popen(cmd, stdout=stdout, stderr=log, text=True)
-        processes.append(p)
-        return p
-
+    for flag in ("no_local", "lockstep", "direct_maps"):
+        if getattr(args, flag):
+            centre_cmd.append("--" + flag.replace("_", "-"))
+    team = TeamProcesses(work)
+    progress_file = work / "progress.json"
+    names = [r.name for r in deployment.robots]
+    done = threading.Event()
     try:
-        start(centre_cmd, "centre")
+        team.start("centre", centre_cmd)
         if not args.direct_maps:
-            for r in deployment.robots:
-                start([*me, "ros2", "robot", "--name", r.name, *team], r.name)
-        sim = start([*me, *_sim_argv(argv)], "sim", stdout=subprocess.PIPE)
+            for name in names:
+                team.start(name, [*me, "ros2", "robot", "--name", name, "--deployment", str(robots_file)] + net)
+        if loss > 0:
+            relay = [*me, "ros2", "relay", "--deployment", str(robots_file), "--loss", str(loss)]
+            team.start("relay", relay + ["--seed", str(args.seed), *net])
+        sim = team.start("sim", [*me, *_sim_argv(argv, progress_file)], stdout=subprocess.PIPE)
         print(
-            f"launched: sim, {'no robot nodes' if args.direct_maps else f'{len(deployment.robots)} robot nodes'}, "
+            f"launched: sim, {'no robot nodes' if args.direct_maps else f'{len(names)} robot nodes'}, "
+            f"{'a relay losing ' + format(loss, '.0%') + ', ' if loss > 0 else ''}"
             f"centre ({'lockstep' if args.lockstep else 'real time'}); logs in {work}",
             file=sys.stderr,
         )
+        striker = threading.Thread(target=_faults, args=(team, spec, names, progress_file, done), daemon=True)
+        striker.start()
         out, _ = sim.communicate()
+        done.set()
+        striker.join()
         if sim.returncode != 0:
             tail = (work / "sim.log").read_text()[-600:].strip().splitlines()
             raise MrExploreError(f"the simulation failed ({tail[-1] if tail else 'no output'}); logs in {work}")
         sim_record = json.loads(out.strip().splitlines()[-1])
     finally:
-        stop_all(processes)
-        for log in logs:
-            log.close()
-    centre_file = work / "centre.json"
-    if not centre_file.is_file():
+        done.set()
+        team.stop_all()
+    record_file = work / "centre.json"
+    if not record_file.is_file():
         raise MrExploreError(f"the centre wrote no record; its log is {work / 'centre.log'}")
-    centre = json.loads(centre_file.read_text())
+    centre = json.loads(record_file.read_text())
     return {
         "measures": {k: v for k, v in sim_record.items() if k not in ("starts_rc", "map_mismatches")},
         "starts_rc": sim_record.get("starts_rc", []),

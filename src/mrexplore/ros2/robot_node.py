@@ -98,7 +98,7 @@ class RobotNode:
         node.create_subscription(pose_msg, topics.pose_topic, self._on_pose, 10)
         node.create_subscription(UInt32MultiArray, "/mrexplore/round", self._on_round, 10)
         node.create_subscription(UInt32MultiArray, topics.reply_topic, self._on_reply, 10)
-        self._out = node.create_publisher(UInt8MultiArray, topics.frontiers_topic, 10)
+        self._out = node.create_publisher(UInt8MultiArray, f"/mrexplore/{topics.name}/frontiers", 10)
 
     def _warn(self, text: str) -> None:
         self.node.get_logger().warning(text)

@@ -18,9 +18,11 @@ and its pose (``/NAME/pose``, geometry_msgs/PoseWithCovarianceStamped), in the t
 
 from __future__ import annotations
 
+import json
 import os
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -39,6 +41,7 @@ from mrexplore.types import CellState, MrExploreError
 __all__ = ["SimSettings", "SimNode", "run_sim_node"]
 
 _REQUEST_AGAIN_S = 2.0
+_LOG_EVERY_S = 5.0
 _FIRST_GOALS_S = 60.0
 """Real time: the simulation starts once every robot has a goal, or after this long."""
 _STATUS = {"executing": 2, "succeeded": 4, "aborted": 6}
@@ -56,6 +59,8 @@ class SimSettings:
     """Simulation steps a second in real time."""
     reply_timeout_s: float = 120.0
     """Lockstep: how long the simulator waits for the centre's answer before it gives up."""
+    progress_file: Path | None = None
+    """Where the simulation's step and coverage are kept up to date (JSON), for a launcher's faults."""
 
 
 class SimNode:
@@ -84,6 +89,7 @@ class SimNode:
         self._poses = [node.create_publisher(PoseWithCovarianceStamped, r.pose_topic, 10) for r in self.robots]
         self._String, self._GoalStatusArray = String, GoalStatusArray
         self._stamp = 0
+        self._progress_at = self._logged_at = 0.0
         self.map_mismatches = 0
         """Lockstep decisions whose map at the centre differed from the simulator's own copy of it."""
         self.centre_ms: list[float] = []
@@ -92,9 +98,8 @@ class SimNode:
         if settings.lockstep:
             self._request_pub = node.create_publisher(String, "/mrexplore/lockstep/request", 10)
             node.create_subscription(String, "/mrexplore/lockstep/decision", self._on_reply, 10)
-            self.mission = Mission(spec, progress=False, centre=self._remote)
+            self.mission = Mission(spec, lambda sim, *_: self.progress(), progress=False, centre=self._remote)
             return
-        import json
 
         def on_status(msg: Any) -> None:
             self.centre_status = json.loads(msg.data)
@@ -110,6 +115,22 @@ class SimNode:
         self._nav: list[str | None] = [None] * n
         self._goal_rc: list[tuple[int, int]] = [(-1, -1)] * n
         self.curve = [self.mission.sim.coverage]
+
+    def progress(self, force: bool = False) -> None:
+        """Keep the progress file and the log's progress line up to date (a few times a second at most)."""
+        now = time.monotonic()
+        if not force and now - self._progress_at < 0.05:
+            return
+        sim = self.mission.sim
+        path = self.settings.progress_file
+        if path is not None:
+            tmp = path.with_suffix(".tmp")
+            tmp.write_text(json.dumps({"step": int(sim.steps), "coverage": float(sim.coverage)}))
+            tmp.replace(path)
+        if now - self._logged_at >= _LOG_EVERY_S:
+            self._logged_at = now
+            self.node.get_logger().info(f"step {sim.steps}, coverage {sim.coverage:.1%}")
+        self._progress_at = now
 
     # -- the world as the robots publish it -------------------------------------------------------------
     def publish_world(self) -> tuple[int, int]:
@@ -226,8 +247,11 @@ class SimNode:
     def step(self) -> None:
         """One simulation step in real time: drive, scan, report to navigation's listeners."""
         sim = self.mission.sim
+        for robot in self.mission.faults.failures_due(sim.steps):
+            sim.fail(robot)  # stops for good and publishes nothing more
         result = sim.step()
         self.curve.append(sim.coverage)
+        self.progress()
         for i in map(int, np.flatnonzero(sim.alive)):
             if self._nav[i] != "executing":
                 continue
@@ -257,6 +281,7 @@ def run_sim_node(settings: SimSettings, loopback: bool = True) -> dict[str, Any]
         spec = settings.spec
         if settings.lockstep:
             result: MissionResult = sim_node.mission.run()
+            sim_node.progress(force=True)
             return {
                 **result.measures.to_dict(),
                 "map_mismatches": sim_node.map_mismatches,
