@@ -115,6 +115,20 @@ def main() -> None:
         bad = team_map_message(room(8), TEAM, "map")
         bad.data = bad.data[:-3]  # data length not width x height
         map_pub.publish(bad)
+        spin(0.3)
+        for resolution in (float("nan"), float("inf"), 0.0):
+            bad = team_map_message(room(8), TEAM, "map")
+            bad.info.resolution = resolution
+            map_pub.publish(bad)
+            spin(0.3)
+        huge = team_map_message(room(8), TEAM, "map")
+        huge.info.width = huge.info.height = 100_000
+        map_pub.publish(huge)
+        spin(0.3)
+        bad = team_map_message(room(8), TEAM, "map")
+        bad.info.origin.position.x = float("nan")
+        map_pub.publish(bad)
+        spin(0.3)
         lost = PoseWithCovarianceStamped()
         lost.pose.pose.position.x = float("nan")
         lost.pose.pose.orientation.w = 1.0

@@ -434,6 +434,7 @@ class CentreNode:
             "heard": [] if heard is None else [bool(h) for h in heard],
             "assignable": [] if assignable is None else [bool(a) for a in assignable],
             "goals_rc": planner.goals.tolist(),
+            "clusters": 0 if planner.decision is None else len(planner.decision.clusters),
             "decisions": planner.decisions,
             "aborts": planner.aborts,
             "paused": self.paused,

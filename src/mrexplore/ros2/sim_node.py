@@ -36,6 +36,7 @@ from mrexplore.ros2.deployment import Deployment
 from mrexplore.ros2.lockstep import DecisionReply, DecisionRequest, state_digest
 from mrexplore.ros2.messages import pose_message, team_map_message
 from mrexplore.sim.belief import classify
+from mrexplore.sim.world import ExplorationSim
 from mrexplore.types import CellState, MrExploreError
 
 __all__ = ["SimSettings", "SimNode", "run_sim_node"]
@@ -98,7 +99,7 @@ class SimNode:
         if settings.lockstep:
             self._request_pub = node.create_publisher(String, "/mrexplore/lockstep/request", 10)
             node.create_subscription(String, "/mrexplore/lockstep/decision", self._on_reply, 10)
-            self.mission = Mission(spec, lambda sim, *_: self.progress(), progress=False, centre=self._remote)
+            self.mission = Mission(spec, lambda sim, *_: self.progress(sim), progress=False, centre=self._remote)
             return
 
         def on_status(msg: Any) -> None:
@@ -116,12 +117,12 @@ class SimNode:
         self._goal_rc: list[tuple[int, int]] = [(-1, -1)] * n
         self.curve = [self.mission.sim.coverage]
 
-    def progress(self, force: bool = False) -> None:
+    def progress(self, sim: ExplorationSim | None = None, force: bool = False) -> None:
         """Keep the progress file and the log's progress line up to date (a few times a second at most)."""
         now = time.monotonic()
         if not force and now - self._progress_at < 0.05:
             return
-        sim = self.mission.sim
+        sim = sim or self.mission.sim
         path = self.settings.progress_file
         if path is not None:
             tmp = path.with_suffix(".tmp")
