@@ -6,9 +6,11 @@ it; it imports no ROS.
 A robot's goal ends when its navigation reports it reached (a goal it stood on that still borders unknown
 space stops being a candidate, as in the simulator), aborted (the area around it is kept from every robot
 for ``blacklist_s``, as explore_lite's blacklist does), or when the goal no longer borders unknown space on
-the team map; the robot then moves on to the next target of its local route that still does, and only
-with none left does it ask for a decision. The whole team is re-assigned when a robot asks, and at least
-every ``replan_s``; a robot whose goal the new decision keeps is not sent it again. A robot the centre has
+the team map (once ``min_replan_s`` passed since the last decision); the robot then moves on to the next
+target of its local route that still does, and only with none left does it ask for a decision. The whole
+team is re-assigned when a robot asks, and at least every ``replan_s``; a robot whose goal the new decision
+keeps is not sent it again, and one left without a goal waits for the next decision: the simulator's
+replanning events (:mod:`~mrexplore.mission`), read from what the robots' navigation reports. A robot the centre has
 not heard for ``silence_rounds`` rounds gets no goal; its map stays. After a restart (a new object), the
 robots' deltas are refused and their whole maps rebuild everything.
 
@@ -75,6 +77,7 @@ class TeamPlanner:
         silence_rounds: int = 3,
         blacklist_s: float = 30.0,
         replan_s: float = 10.0,
+        min_replan_s: float = 1.0,
         blacklist_radius_m: float = 0.5,
         seed: int = 0,
     ) -> None:
@@ -83,7 +86,7 @@ class TeamPlanner:
         self.strategy = strategy
         self.resolution_m = resolution_m
         self.team = TeamCentre(n_robots, shape, strategy.preprocess.closing_size_cells, silence_rounds)
-        self.blacklist_s, self.replan_s = blacklist_s, replan_s
+        self.blacklist_s, self.replan_s, self.min_replan_s = blacklist_s, replan_s, min_replan_s
         self._radius = max(1, round(blacklist_radius_m / resolution_m))
         self.goals = np.tile(NO_GOAL, (n_robots, 1))
         """``(n_robots, 2) int32`` each robot's goal in the team grid ((-1, -1): none)."""
@@ -95,6 +98,8 @@ class TeamPlanner:
         self._stood = np.zeros(shape, dtype=bool)
         self._barred_until = np.zeros(shape, dtype=np.float64)
         self._last_decision = -np.inf
+        self._freed: set[int] = set()
+        """Robots whose goal ended since the last decision."""
         self.rng = np.random.default_rng(seed)
         self.decision: Decision | None = None
         self.done_reason: str | None = None
@@ -130,6 +135,7 @@ class TeamPlanner:
             self._drop(robot)
 
     def _drop(self, robot: int) -> None:
+        self._freed.add(robot)
         self.goals[robot] = NO_GOAL
         self.routes[robot] = NO_ROUTE
 
@@ -163,28 +169,34 @@ class TeamPlanner:
         )
 
     def plan(self, round_: int, now: float | None = None, force: bool = False) -> dict[int, NDArray[np.int32]]:
-        """After ``round_``'s messages: move robots on along their routes, decide where a robot asks or
-        ``replan_s`` passed (or ``force``); returns the goals to send, ``{robot: (r, c)}``. Sets
-        :attr:`done_reason` when no reachable cluster is left."""
+        """After ``round_``'s messages: move robots on along their routes; decide where a robot's goal
+        ended (its navigation reached or aborted it, or it was seen with no target of its route left and
+        ``min_replan_s`` passed since the last decision), where ``replan_s`` passed, or on ``force``;
+        returns the goals to send, ``{robot: (r, c)}``. A robot left without a goal waits for the next
+        decision. Sets :attr:`done_reason` when no reachable cluster is left."""
         now = time.monotonic() if now is None else now
         active = self.assignable(round_)
         un_mask = self.team.frontiers().un_mask
         blacklist = self.blacklist(now)
         sent: dict[int, NDArray[np.int32]] = {}
-        need = force or now - self._last_decision >= self.replan_s
+        need = force or now - self._last_decision >= self.replan_s or bool(self._freed & set(map(int, active)))
+        settled = now - self._last_decision >= self.min_replan_s
         for i in map(int, active):
             goal = self.goals[i]
-            if goal[0] >= 0 and not un_mask[goal[0], goal[1]]:
-                self._drop(i)  # seen: the next target of its route that still borders unknown space
-                route = self.routes[i]
-                keep = [k for k, t in enumerate(route) if un_mask[t[0], t[1]] and not blacklist[t[0], t[1]]]
-                if keep:
-                    self.goals[i], self.routes[i] = route[keep[0]], route[keep[0] + 1 :]
-                    self.nav[i] = NavState.SENT
-                    sent[i] = self.goals[i].copy()
-            need |= self.goals[i, 0] < 0
+            if goal[0] < 0 or un_mask[goal[0], goal[1]] or not settled:
+                continue  # driving on towards a goal already seen costs little; a decision costs the team
+            self._drop(i)  # seen: the next target of its route that still borders unknown space
+            route = self.routes[i]
+            keep = [k for k, t in enumerate(route) if un_mask[t[0], t[1]] and not blacklist[t[0], t[1]]]
+            if keep:
+                self.goals[i], self.routes[i] = route[keep[0]], route[keep[0] + 1 :]
+                self.nav[i] = NavState.SENT
+                sent[i] = self.goals[i].copy()
+            else:
+                need = True
         if not need or len(active) == 0:
             return sent
+        self._freed.clear()
         current = [
             np.vstack([self.goals[i : i + 1], self.routes[i]]) if self.goals[i, 0] >= 0 else NO_ROUTE
             for i in map(int, active)

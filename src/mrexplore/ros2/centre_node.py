@@ -129,6 +129,7 @@ class CentreNode:
             silence_rounds=silence,
             blacklist_s=dep.blacklist_s,
             replan_s=dep.replan_s,
+            min_replan_s=dep.min_replan_s,
             seed=settings.seed,
         )
         self.wire = [WireCounts() for _ in range(n)]
@@ -285,6 +286,8 @@ class CentreNode:
         r.inbox[i] = message
         r.last_in = time.monotonic()
         self._replies[i].publish(self._UInt32MultiArray(data=[r.round, ACK]))
+        if r.expected <= set(r.inbox):
+            self._close()  # the round is complete: decide now, not at the next tick
 
     def _close(self) -> None:
         r = self._round
@@ -294,19 +297,24 @@ class CentreNode:
             self.planner.receive(r.inbox[i], r.round)
         t_in = r.last_in or time.monotonic()
         if r.request is not None:
-            self._decide_lockstep(r.request)
+            t_out = self._decide_lockstep(r.request)
         elif not self.paused:
             now = time.monotonic()
             for i, goal in self.planner.plan(r.round, now, force=self._force).items():
                 self._send_goal(i, goal)
+            t_out = time.monotonic()
             self._force = False
             if self.planner.done_reason is not None:
                 self.finished = self.planner.done_reason
                 self.node.get_logger().info(f"exploration finished: {_WHY[self.finished]}")
-        self.decision_ms.append((time.monotonic() - t_in) * 1e3)
+        else:
+            t_out = time.monotonic()
+        self.decision_ms.append((t_out - t_in) * 1e3)  # the last message in -> every goal out
         self._publish_views()
 
-    def _decide_lockstep(self, request: DecisionRequest) -> None:
+    def _decide_lockstep(self, request: DecisionRequest) -> float:
+        """Decide on the simulator's request; returns when every goal was out (``time.monotonic()``); the
+        decision's record for the simulator follows."""
         t0 = time.perf_counter()
         planner = self.planner
         active = np.asarray(request.active, dtype=np.int64)
@@ -329,6 +337,7 @@ class CentreNode:
             planner.goals[i], planner.routes[i] = goal, decision.routes[j][1:]
             if goal[0] >= 0:
                 self._send_goal(i, goal)
+        t_out = time.monotonic()
         reply = DecisionReply.of(
             request.round, request.active, decision, rng.bit_generator.state, (time.perf_counter() - t0) * 1e3
         )
@@ -337,6 +346,7 @@ class CentreNode:
         if decision.done_reason is not None:
             planner.done_reason = decision.done_reason
             self.node.get_logger().info(f"exploration finished: {_WHY[decision.done_reason]}")
+        return t_out
 
     # -- goals and navigation --------------------------------------------------------------------------
     def _send_goal(self, i: int, goal_rc: NDArray[np.integer]) -> None:

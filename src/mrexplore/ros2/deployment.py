@@ -10,6 +10,7 @@ Example file (every field but ``robots`` has a default; a robot given as a bare 
     lost_after_s: 5.0              # a robot silent this long gets no goal (its map stays)
     blacklist_s: 30.0              # an aborted goal's area is kept from the robots this long
     replan_s: 10.0                 # a full decision at least this often
+    min_replan_s: 1.0              # a goal already seen is driven on to until this passed since a decision
     reliable: true                 # QoS of the frontier messages (false: best effort)
     robots:
       - name: robot1
@@ -130,6 +131,7 @@ class Deployment:
     lost_after_s: float = 5.0
     blacklist_s: float = 30.0
     replan_s: float = 10.0
+    min_replan_s: float = 1.0
     reliable: bool = True
 
     def robot(self, name: str) -> RobotEntry:
@@ -161,7 +163,7 @@ class Deployment:
         if not isinstance(grid_data, dict) or set(grid_data) - {f.name for f in fields(TeamGrid)}:
             raise MrExploreError(f"{what}: team_grid takes x0, y0, width, height, resolution (metres)")
         kwargs: dict[str, Any] = {}
-        for key in ("round_period_s", "round_timeout_s", "lost_after_s", "blacklist_s", "replan_s"):
+        for key in ("round_period_s", "round_timeout_s", "lost_after_s", "blacklist_s", "replan_s", "min_replan_s"):
             if key in data:
                 value = _number(data[key], key, what)
                 if value <= 0:
@@ -188,7 +190,9 @@ class Deployment:
             }
             for r in self.robots
         ]
-        timing = ("round_period_s", "round_timeout_s", "lost_after_s", "blacklist_s", "replan_s", "reliable")
+        timing: tuple[str, ...] = ("round_period_s", "round_timeout_s", "lost_after_s", "blacklist_s", "replan_s")
+        timing += ("min_replan_s",)
+        timing += ("reliable",)
         return {
             "team_frame": self.team_frame,
             "team_grid": dict(self.team_grid.__dict__),

@@ -144,10 +144,11 @@ def launch_team(
 ) -> dict[str, Any]:
     """Run one mission (``spec``, with the settings ``run``) through separate processes; returns the
     simulator's measures (``measures``), the starts and what the centre measured on the wire."""
+    domain = "the system's"
     if not args.network:
         from mrexplore.ros2.loopback import keep_on_loopback
 
-        keep_on_loopback()
+        domain = keep_on_loopback()["ROS_DOMAIN_ID"]
     work = Path(tempfile.mkdtemp(prefix="mrexplore_launch_"))
     config = work / "config.yaml"
     config.write_text(config_yaml(run))
@@ -160,6 +161,7 @@ def launch_team(
         round_period_s=period,
         round_timeout_s=period,
         replan_s=spec.mission_cfg.replan_every_steps / args.speed,
+        min_replan_s=spec.mission_cfg.min_replan_steps / args.speed,
     )
     loss = spec.mission_cfg.faults.message_loss
     robots_file, centre_file = work / "deployment.yaml", work / "centre_deployment.yaml"
@@ -195,7 +197,7 @@ def launch_team(
         print(
             f"launched: sim, {'no robot nodes' if args.direct_maps else f'{len(names)} robot nodes'}, "
             f"{'a relay losing ' + format(loss, '.0%') + ', ' if loss > 0 else ''}"
-            f"centre ({'lockstep' if args.lockstep else 'real time'}); logs in {work}",
+            f"centre ({'lockstep' if args.lockstep else 'real time'}); ROS domain {domain}; logs in {work}",
             file=sys.stderr,
         )
         striker = threading.Thread(target=_faults, args=(team, spec, names, progress_file, done), daemon=True)

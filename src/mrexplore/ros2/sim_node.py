@@ -5,7 +5,8 @@ Each simulated robot publishes its belief as its map (``/NAME/map``, nav_msgs/Oc
 and its pose (``/NAME/pose``, geometry_msgs/PoseWithCovarianceStamped), in the team frame.
 
 - In real time (the default) it stands in for Nav2 too: it follows the goals on ``/NAME/goal_pose`` along
-  the shortest path through the cells its own map does not hold occupied, advancing ``speed`` simulation steps a
+  the shortest path through the cells its own map or the team map (``/mrexplore/map``, as a Nav2 costmap's
+  static layer may take it) holds free, else through unknown space too, advancing ``speed`` simulation steps a
   second, and publishes the action status Nav2 would on ``/NAME/navigate_to_pose/_action/status``
   (executing, then succeeded; aborted when no path is known or the way turns out blocked). It ends when the
   centre's status says the exploration finished, or at ``max_steps``.
@@ -115,6 +116,8 @@ class SimNode:
         self._goal_stamps: list[Any] = [None] * n
         self._nav: list[str | None] = [None] * n
         self._goal_rc: list[tuple[int, int]] = [(-1, -1)] * n
+        self._team_map: NDArray[np.uint8] | None = None
+        node.create_subscription(OccupancyGrid, "/mrexplore/map", self._on_team_map, latched)
         self.curve = [self.mission.sim.coverage]
 
     def progress(self, sim: ExplorationSim | None = None, force: bool = False) -> None:
@@ -221,12 +224,23 @@ class SimNode:
         own = classify(belief.log_odds, belief.observed, self.settings.spec.sim_cfg.sensor)
         here = (int(sim.positions_rc[i, 0]), int(sim.positions_rc[i, 1]))
         goal = self._goal_rc[i]
-        for passable in (own == CellState.FREE, own != CellState.OCCUPIED):
+        free, occupied = own == CellState.FREE, own == CellState.OCCUPIED
+        if self._team_map is not None:  # the team map, as a Nav2 costmap's static layer may take it
+            free |= self._team_map == CellState.FREE
+            occupied |= self._team_map == CellState.OCCUPIED
+        for passable in (free, ~occupied):
             passable[here] = True
             path = astar_path(passable, here, goal)
             if len(path):
                 return path
         return np.zeros((0, 2), np.int32)
+
+    def _on_team_map(self, msg: Any) -> None:
+        if msg.info.width == self.frame.width and msg.info.height == self.frame.height:
+            values = np.frombuffer(bytes(msg.data), dtype=np.int8).reshape(self.frame.height, self.frame.width)
+            self._team_map = np.where(
+                values < 0, CellState.UNKNOWN, np.where(values >= 50, CellState.OCCUPIED, CellState.FREE)
+            ).astype(np.uint8)[::-1]  # rows along +y in the message, row 0 at the top here
 
     def every_robot_has_a_goal(self) -> bool:
         return all(nav is not None for nav in self._nav)
