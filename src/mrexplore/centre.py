@@ -4,8 +4,8 @@ between decisions as a robot's navigation reports on them. ``mrexplore ros2 cent
 it; it imports no ROS.
 
 A robot's goal ends when its navigation reports it reached (a goal it stood on that still borders unknown
-space stops being a candidate, as in the simulator), aborted (the area around it is kept from every robot
-for ``blacklist_s``, as explore_lite's blacklist does), or when the goal no longer borders unknown space on
+space stops being a candidate, as in the simulator), aborted (the clusters centred around it are kept from
+that robot for ``blacklist_s``, as explore_lite's blacklist does), or when the goal no longer borders unknown space on
 the team map (once ``min_replan_s`` passed since the last decision); the robot then moves on to the next
 target of its local route that still does, and only with none left does it ask for a decision. The whole
 team is re-assigned when a robot asks, and at least every ``replan_s``; a robot whose goal the new decision
@@ -27,9 +27,9 @@ Examples
 >>> planner.receive(decode_message(robot.compose(0, (4, 4), robot.window()).incremental()), 0)
 >>> planner.plan(0, now=0.0)  # the goal to send robot 0
 {0: array([2, 3], dtype=int32)}
->>> planner.navigation(0, NavState.ABORTED, now=1.0)  # its navigation gave up: the area is barred a while
->>> planner.plan(0, now=1.0), planner.aborts  # another goal at once, outside the barred square
-({0: array([5, 2], dtype=int32)}, 1)
+>>> planner.navigation(0, NavState.ABORTED, now=1.0)  # its navigation gave up on it
+>>> planner.plan(0, now=1.0), planner.aborts  # another goal at once: that cluster is kept from it a while
+({0: array([2, 6], dtype=int32)}, 1)
 """
 
 from __future__ import annotations
@@ -46,7 +46,9 @@ from mrexplore.preprocessing.sparse_codec import decode as decode_message
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap
 from mrexplore.types import BoolGrid, CellState, MrExploreError
 
-__all__ = ["TeamPlanner", "NavState", "decode_message"]
+__all__ = ["TeamPlanner", "NavState", "decode_message", "NO_ORACLE"]
+
+NO_ORACLE = "the oracle needs the ground truth, which a real team lacks; pick another strategy"
 
 
 class NavState:
@@ -82,7 +84,7 @@ class TeamPlanner:
         seed: int = 0,
     ) -> None:
         if strategy.name == "oracle":
-            raise MrExploreError("the oracle needs the ground truth, which a real team lacks; pick another strategy")
+            raise MrExploreError(NO_ORACLE)
         self.strategy = strategy
         self.resolution_m = resolution_m
         self.team = TeamCentre(n_robots, shape, strategy.preprocess.closing_size_cells, silence_rounds)
@@ -96,7 +98,8 @@ class TeamPlanner:
         self.starts = np.full((n_robots, 2), -1, dtype=np.int32)
         """``(n_robots, 2) int32`` each robot's cell in its first message (its way home)."""
         self._stood = np.zeros(shape, dtype=bool)
-        self._barred_until = np.zeros(shape, dtype=np.float64)
+        self._barred: list[tuple[int, tuple[int, int, int, int], float]] = []
+        """Areas kept from one robot: ``(robot, (r0, r1, c0, c1), until)``."""
         self._last_decision = -np.inf
         self._freed: set[int] = set()
         """Robots whose goal ended since the last decision."""
@@ -125,8 +128,10 @@ class TeamPlanner:
             return
         self.nav[robot] = state
         if state == NavState.ABORTED:
-            r, (g0, g1) = self._radius, goal
-            self._barred_until[max(0, g0 - r) : g0 + r + 1, max(0, g1 - r) : g1 + r + 1] = now + self.blacklist_s
+            r, (g0, g1) = self._radius, (int(goal[0]), int(goal[1]))
+            self._barred.append(
+                (robot, (max(0, g0 - r), g0 + r + 1, max(0, g1 - r), g1 + r + 1), now + self.blacklist_s)
+            )
             self.aborts += 1
             self._drop(robot)
         elif state == NavState.REACHED:
@@ -139,9 +144,20 @@ class TeamPlanner:
         self.goals[robot] = NO_GOAL
         self.routes[robot] = NO_ROUTE
 
-    def blacklist(self, now: float) -> BoolGrid:
-        """``(H, W) bool`` cells that are not candidates at ``now``."""
-        return self._stood | (self._barred_until > now)
+    def blacklist(self) -> BoolGrid:
+        """``(H, W) bool`` cells that are no candidates for any robot (goals stood on that stayed frontiers)."""
+        return self._stood
+
+    def barred(self, robot: int, now: float) -> BoolGrid | None:
+        """``(H, W) bool`` cells whose clusters are kept from ``robot`` at ``now`` (None: none)."""
+        self._barred = [b for b in self._barred if b[2] > now]
+        boxes = [box for i, box, _ in self._barred if i == robot]
+        if not boxes:
+            return None
+        mask = np.zeros(self._stood.shape, dtype=bool)
+        for r0, r1, c0, c1 in boxes:
+            mask[r0:r1, c0:c1] = True
+        return mask
 
     # -- decisions -------------------------------------------------------------------------------------
     def assignable(self, round_: int) -> NDArray[np.int64]:
@@ -155,9 +171,10 @@ class TeamPlanner:
         current: Sequence[NDArray[np.int32]],
         rng: np.random.Generator,
         active: NDArray[np.int64],
+        barred: Sequence[BoolGrid | None] | None = None,
     ) -> DecisionInput:
         """What the strategy decides on after ``round_``: the team map, the ``active`` robots' cells,
-        the blacklist and their current routes."""
+        the blacklist, their current routes and what is kept from each."""
         return DecisionInput(
             self.team.state(),
             self.team.positions_rc[active],
@@ -166,6 +183,7 @@ class TeamPlanner:
             current,
             rng,
             self.team.frontiers(),
+            barred,
         )
 
     def plan(self, round_: int, now: float | None = None, force: bool = False) -> dict[int, NDArray[np.int32]]:
@@ -177,7 +195,8 @@ class TeamPlanner:
         now = time.monotonic() if now is None else now
         active = self.assignable(round_)
         un_mask = self.team.frontiers().un_mask
-        blacklist = self.blacklist(now)
+        blacklist = self.blacklist()
+        barred = [self.barred(int(i), now) for i in active]
         sent: dict[int, NDArray[np.int32]] = {}
         need = force or now - self._last_decision >= self.replan_s or bool(self._freed & set(map(int, active)))
         settled = now - self._last_decision >= self.min_replan_s
@@ -187,7 +206,12 @@ class TeamPlanner:
                 continue  # driving on towards a goal already seen costs little; a decision costs the team
             self._drop(i)  # seen: the next target of its route that still borders unknown space
             route = self.routes[i]
-            keep = [k for k, t in enumerate(route) if un_mask[t[0], t[1]] and not blacklist[t[0], t[1]]]
+            mine = barred[list(map(int, active)).index(i)]
+            keep = [
+                k
+                for k, t in enumerate(route)
+                if un_mask[t[0], t[1]] and not blacklist[t[0], t[1]] and (mine is None or not mine[t[0], t[1]])
+            ]
             if keep:
                 self.goals[i], self.routes[i] = route[keep[0]], route[keep[0] + 1 :]
                 self.nav[i] = NavState.SENT
@@ -201,11 +225,11 @@ class TeamPlanner:
             np.vstack([self.goals[i : i + 1], self.routes[i]]) if self.goals[i, 0] >= 0 else NO_ROUTE
             for i in map(int, active)
         ]
-        decision = self.strategy.decide(self.decision_input(round_, blacklist, current, self.rng, active))
+        decision = self.strategy.decide(self.decision_input(round_, blacklist, current, self.rng, active, barred))
         self.decision, self._last_decision = decision, now
         self.decisions += 1
         if decision.done_reason is not None:
-            if not (self._barred_until > now).any():
+            if not any(b is not None for b in barred):
                 self.done_reason = decision.done_reason
             return sent  # only aborted goals' areas are left: they are tried again once their time is up
         for j, i in enumerate(map(int, active)):

@@ -452,8 +452,11 @@ def _ros2(args: argparse.Namespace, argv: list[str]) -> str:
         robot = RobotNodeSettings(args.name, index, team, offset, pose_type, run.preprocess, entry=entry)
         run_robot_node(robot, loopback=loopback)
         return f"robot {args.name} stopped"
+    from mrexplore.centre import NO_ORACLE
     from mrexplore.ros2.centre_node import CentreSettings, run_centre_node
 
+    if args.strategy == "oracle":
+        raise MrExploreError(NO_ORACLE)  # before the middleware starts
     strategy = make_strategy(
         args.strategy,
         run.global_planning,

@@ -112,7 +112,7 @@ def main() -> None:
                 spin(0.1)
             return len(goals) >= count
 
-        result["first_goal"] = wait_goal(1, 60)
+        result["first_goal"] = wait_goal(1, 120)
         spin(0.5)
         # The team map and markers, read back.
         agent = RobotAgent(0, (12, 20), PreprocessConfig(), SensorConfig())

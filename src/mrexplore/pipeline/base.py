@@ -241,7 +241,8 @@ class ExplorationPipeline:
         if len(clusters) == 0:
             return PosedDecision(None, _ended(planning, frontiers, clusters, n, "no_frontiers"))
         own = goals if self.commitment < 1 else []  # a robot's own goal is read for hysteresis only
-        stop = self.stop_searches and own_planner and far is None and not computed
+        barring = any(b is not None for b in inp.barred or ())  # every centre's distance is read then
+        stop = self.stop_searches and own_planner and far is None and not computed and not barring
         reads = self.own_reads(robots_rc, cand, resolution_m) if stop else None
         with timed(self.timer, "distances"):
             if computed:  # the strategy's candidates asked for them
@@ -260,6 +261,9 @@ class ExplorationPipeline:
                 fields = list(far.fields(passable, robots_rc, clusters.centers_rc, own))
         dist = np.stack([distances_at(f, clusters.centers_rc) for f in fields])
         kept = self._committed(clusters, fields, current, dist) if current is not None and self.commitment < 1 else {}
+        for i, barred in enumerate(inp.barred or ()):
+            if barred is not None:
+                dist[i, barred[clusters.centers_rc[:, 0], clusters.centers_rc[:, 1]]] = np.inf
         if not np.isfinite(dist).any():
             return PosedDecision(None, _ended(planning, frontiers, clusters, n, "no_reachable_frontiers"))
         robots = np.asarray(robots_rc, np.int32)

@@ -76,6 +76,10 @@ class DecisionInput:
     frontiers: Frontiers | None = None
     """Those of ``state`` where the caller has them (the centre keeps them where the grid changed); None:
     detected from ``state``."""
+    barred: Sequence[BoolGrid | None] | None = None
+    """Per robot, ``(H, W) bool`` cells whose clusters are kept from that robot alone (its navigation aborted a
+    goal there, :class:`~mrexplore.centre.TeamPlanner`): a cluster centred there reads unreachable for it.
+    None: none."""
 
 
 @dataclass(frozen=True)
