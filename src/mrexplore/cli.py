@@ -354,7 +354,9 @@ def _add_ros2(sub: Any) -> None:
         metavar="X,Y,YAW",
         help="where the robot's map frame lies in the team frame (default 0,0,0: one shared frame)",
     )
-    ro.add_argument("--pose-type", default=None, help="pose_with_covariance (AMCL, default) or odometry")
+    ro.add_argument(
+        "--pose-type", default=None, help="pose_with_covariance (AMCL, default), odometry, or tf (needs tf2_ros)"
+    )
     _add_team_flags(ro, robots=False)
     ce = kinds.add_parser("centre", help="the computing centre: frontier messages -> layers 1-3 -> Nav2 goals")
     ce.add_argument(

@@ -16,7 +16,7 @@ Example file (every field but ``robots`` has a default; a robot given as a bare 
       - name: robot1
         offset: [0.0, 0.0, 0.0]    # x, y (m), yaw (rad) of its map frame in the team frame
         frame: map                 # the frame of its goals (default: map)
-        pose_type: pose_with_covariance   # or odometry
+        pose_type: pose_with_covariance   # or odometry, or tf (a tf2 lookup of base_frame in frame)
         map_topic: /robot1/map     # defaults: /NAME/map, /NAME/pose, /NAME/goal_pose,
         pose_topic: /robot1/pose   #           /NAME/navigate_to_pose/_action/status
       - robot2
@@ -51,7 +51,9 @@ from mrexplore.types import MrExploreError
 
 __all__ = ["Deployment", "RobotEntry", "TeamGrid", "read_deployment", "POSE_TYPES"]
 
-POSE_TYPES = ("pose_with_covariance", "odometry")
+POSE_TYPES = ("pose_with_covariance", "odometry", "tf")
+"""How a robot's pose is read: PoseWithCovarianceStamped (AMCL, slam_toolbox), nav_msgs/Odometry, or a tf2 lookup
+of ``base_frame`` in ``frame`` (needs tf2_ros from a sourced ROS 2 installation; untested here)."""
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 
 
@@ -93,6 +95,8 @@ class RobotEntry:
     index: int
     offset: FrameOffset = FrameOffset()
     frame: str = "map"
+    base_frame: str = "base_link"
+    """The robot's body frame, for ``pose_type: tf``."""
     pose_type: str = "pose_with_covariance"
     map_topic: str = ""
     pose_topic: str = ""
@@ -184,7 +188,8 @@ class Deployment:
             {
                 "name": r.name,
                 "offset": [r.offset.x_m, r.offset.y_m, r.offset.yaw_rad],
-                **{k: getattr(r, k) for k in ("frame", "pose_type", "map_topic", "pose_topic", "goal_topic")},
+                **{k: getattr(r, k) for k in ("frame", "base_frame", "pose_type", "map_topic", "pose_topic")},
+                "goal_topic": r.goal_topic,
                 "nav_status_topic": r.nav_status_topic,
                 "frontiers_topic": r.frontiers_topic,
             }

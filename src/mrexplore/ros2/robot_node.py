@@ -21,13 +21,14 @@ node keeps what it had.
 
 from __future__ import annotations
 
+import importlib.util
 import math
 from dataclasses import dataclass
 from typing import Any
 
 from mrexplore.config import GridThresholds, PreprocessConfig, SensorConfig
 from mrexplore.maps.frame import GridFrame
-from mrexplore.maps.occupancy_grid import FrameOffset, state_in_team_frame
+from mrexplore.maps.occupancy_grid import FrameOffset, state_in_team_frame, yaw_of
 from mrexplore.preprocessing.agents import RobotAgent
 from mrexplore.preprocessing.sparse_codec import decode
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap
@@ -67,6 +68,11 @@ class RobotNodeSettings:
     def __post_init__(self) -> None:
         if self.pose_type not in POSE_TYPES:
             raise MrExploreError(f"pose type must be one of {', '.join(POSE_TYPES)}, got {self.pose_type!r}")
+        if self.pose_type == "tf" and importlib.util.find_spec("tf2_ros") is None:
+            raise MrExploreError(
+                "pose type tf needs tf2_ros, which comes with a sourced ROS 2 installation (not on PyPI); "
+                "source it, or use pose_with_covariance or odometry"
+            )
 
 
 class RobotNode:
@@ -94,8 +100,15 @@ class RobotNode:
             depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
         )
         node.create_subscription(OccupancyGrid, topics.map_topic, self._on_map, latched)
-        pose_msg = PoseWithCovarianceStamped if settings.pose_type == "pose_with_covariance" else Odometry
-        node.create_subscription(pose_msg, topics.pose_topic, self._on_pose, 10)
+        self._tf: Any = None
+        if settings.pose_type == "tf":  # the robot's pose looked up when a round is answered
+            import tf2_ros
+
+            self._tf = tf2_ros.Buffer()
+            self._tf_listener = tf2_ros.TransformListener(self._tf, node)
+        else:
+            pose_msg = PoseWithCovarianceStamped if settings.pose_type == "pose_with_covariance" else Odometry
+            node.create_subscription(pose_msg, topics.pose_topic, self._on_pose, 10)
         node.create_subscription(UInt32MultiArray, "/mrexplore/round", self._on_round, 10)
         node.create_subscription(UInt32MultiArray, topics.reply_topic, self._on_reply, 10)
         self._out = node.create_publisher(UInt8MultiArray, f"/mrexplore/{topics.name}/frontiers", 10)
@@ -117,17 +130,36 @@ class RobotNode:
 
     def _on_pose(self, msg: Any) -> None:
         x, y, yaw = pose_xyyaw(msg.pose.pose)
+        if self._place(x, y, yaw):
+            self._pose_stamp = (int(msg.header.stamp.sec), int(msg.header.stamp.nanosec))
+            self._answer()
+
+    def _look_up_pose(self) -> None:
+        """The robot's pose from tf2: its base frame in its map frame, now."""
+        import rclpy.time
+
+        topics = self.settings.topics
+        try:
+            t = self._tf.lookup_transform(topics.frame, topics.base_frame, rclpy.time.Time())
+        except Exception as exc:  # noqa: BLE001 - tf2's lookup errors share no base class importable here
+            self._warn(f"pose not known: tf2 has no {topics.frame} -> {topics.base_frame} ({type(exc).__name__})")
+            return
+        q = t.transform.rotation
+        if self._place(float(t.transform.translation.x), float(t.transform.translation.y), yaw_of(q.x, q.y, q.z, q.w)):
+            self._pose_stamp = (int(t.header.stamp.sec), int(t.header.stamp.nanosec))
+
+    def _place(self, x: float, y: float, yaw: float) -> bool:
+        """Put the robot at a pose of its map frame in the team's grid; False (one warning) where it cannot be."""
         if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(yaw)):
             self._warn(f"pose dropped: position ({x}, {y}) and heading {yaw} must be finite")
-            return
+            return False
         xy = self.settings.offset.to_team(x, y)
         rc = self.settings.team.xy_to_rc(xy)
         if not self.settings.team.contains(rc):
             self._warn(f"pose dropped: ({xy[0]:.2f}, {xy[1]:.2f}) m lies outside the team's grid")
-            return
+            return False
         self.position_rc = rc
-        self._pose_stamp = (int(msg.header.stamp.sec), int(msg.header.stamp.nanosec))
-        self._answer()
+        return True
 
     def _on_round(self, msg: Any) -> None:
         values = [int(v) for v in msg.data]
@@ -139,6 +171,8 @@ class RobotNode:
 
     def _answer(self) -> None:
         """Answer the round asked for once the robot holds a map and a pose of its stamp or later."""
+        if self._tf is not None and self._asked is not None:
+            self._look_up_pose()
         if self._asked is None or self.position_rc is None or not self.has_map:
             return  # nothing to send before the robot's first map and pose
         round_, stamp = self._asked
