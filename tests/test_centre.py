@@ -67,8 +67,14 @@ def test_a_goal_reached_that_stays_a_frontier_stops_being_a_candidate() -> None:
     planner = planner_with([(4, 3)], room())
     goal = planner.plan(0, now=0.0)[0].copy()
     planner.navigation(0, NavState.REACHED, now=2.0)
-    assert planner.blacklist()[goal[0], goal[1]]
     assert planner.plan(0, now=2.0)  # a decision at once: the robot's goal ended
+    assert not planner.blacklist()[goal[0], goal[1]]  # the robot's map from there is not in yet
+    for round_ in (1, 2):  # its next maps: the goal still borders unknown space
+        agent = RobotAgent(0, SHAPE, planner.strategy.preprocess, SensorConfig())
+        agent.sense_state(room())
+        planner.receive(decode(agent.compose(round_, (4, 3), agent.window()).full_bytes()), round_)
+    planner.plan(2, now=3.0)
+    assert planner.blacklist()[goal[0], goal[1]]
 
 
 def test_a_silent_robot_gets_no_goal_and_the_centre_ends_when_nothing_is_left() -> None:

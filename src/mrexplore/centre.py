@@ -68,6 +68,9 @@ class TeamPlanner:
     ----------
     blacklist_radius_m:
         Half the side of the square kept from the robots around an aborted goal.
+    settle_s:
+        The centre declares the exploration done only once it heard every robot, or this long after its first
+        round (a robot lost for good).
     """
 
     def __init__(
@@ -80,6 +83,7 @@ class TeamPlanner:
         blacklist_s: float = 30.0,
         replan_s: float = 10.0,
         min_replan_s: float = 1.0,
+        settle_s: float = 5.0,
         blacklist_radius_m: float = 0.5,
         seed: int = 0,
     ) -> None:
@@ -89,6 +93,7 @@ class TeamPlanner:
         self.resolution_m = resolution_m
         self.team = TeamCentre(n_robots, shape, strategy.preprocess.closing_size_cells, silence_rounds)
         self.blacklist_s, self.replan_s, self.min_replan_s = blacklist_s, replan_s, min_replan_s
+        self.settle_s = settle_s
         self._radius = max(1, round(blacklist_radius_m / resolution_m))
         self.goals = np.tile(NO_GOAL, (n_robots, 1))
         """``(n_robots, 2) int32`` each robot's goal in the team grid ((-1, -1): none)."""
@@ -103,6 +108,9 @@ class TeamPlanner:
         self._last_decision = -np.inf
         self._freed: set[int] = set()
         """Robots whose goal ended since the last decision."""
+        self._reached: list[tuple[int, NDArray[np.int32], int]] = []
+        """Goals reached, with the round of the robot's last message then: checked after its next two."""
+        self._first_plan: float | None = None
         self.rng = np.random.default_rng(seed)
         self.decision: Decision | None = None
         self.done_reason: str | None = None
@@ -135,8 +143,8 @@ class TeamPlanner:
             self.aborts += 1
             self._drop(robot)
         elif state == NavState.REACHED:
-            if self.team.frontiers().un_mask[goal[0], goal[1]]:
-                self._stood[goal[0], goal[1]] = True  # stood on it and it stayed a frontier
+            # Whether it stayed a frontier shows in the robot's first map sent after it got there: checked then.
+            self._reached.append((robot, goal.copy(), self.team.last_heard[robot]))
             self._drop(robot)
 
     def _drop(self, robot: int) -> None:
@@ -193,8 +201,17 @@ class TeamPlanner:
         returns the goals to send, ``{robot: (r, c)}``. A robot left without a goal waits for the next
         decision. Sets :attr:`done_reason` when no reachable cluster is left."""
         now = time.monotonic() if now is None else now
+        if self._first_plan is None:
+            self._first_plan = now
         active = self.assignable(round_)
         un_mask = self.team.frontiers().un_mask
+        pending = []
+        for robot, goal, heard in self._reached:
+            if self.team.last_heard[robot] < heard + 2:  # its next answer may predate the arrival
+                pending.append((robot, goal, heard))
+            elif un_mask[goal[0], goal[1]]:
+                self._stood[goal[0], goal[1]] = True  # stood on it and it stayed a frontier
+        self._reached = pending
         blacklist = self.blacklist()
         barred = [self.barred(int(i), now) for i in active]
         sent: dict[int, NDArray[np.int32]] = {}
@@ -229,9 +246,12 @@ class TeamPlanner:
         self.decision, self._last_decision = decision, now
         self.decisions += 1
         if decision.done_reason is not None:
-            if not any(b is not None for b in barred):
+            # Not while only aborted goals' areas are left (they are tried again once their time is up), nor
+            # before every robot's map is in or settle_s passed (a restarted centre hears them one by one).
+            everyone = bool((self.team.last_heard >= 0).all()) or now - self._first_plan >= self.settle_s
+            if everyone and not any(b is not None for b in barred):
                 self.done_reason = decision.done_reason
-            return sent  # only aborted goals' areas are left: they are tried again once their time is up
+            return sent
         for j, i in enumerate(map(int, active)):
             goal = decision.goals_rc[j]
             if goal[0] < 0 or np.array_equal(goal, self.goals[i]):

@@ -508,7 +508,7 @@ def _ros2_sim(args: argparse.Namespace, argv: list[str]) -> str:
     full = {**_mission_record(run, strategy, truth, args, measures, starts_rc), **record}
     if args.json:
         print(json.dumps(strict_json(full), allow_nan=False))
-    return _summary(full) if not args.json else "launch ended"
+    return "launch ended" if args.json else _launch_summary(full)
 
 
 def _add_report(sub: Any) -> None:
@@ -819,6 +819,24 @@ def strict_json(value: Any) -> Any:
 
 def _kb(n: int | None) -> str:
     return "not counted" if n is None else f"{n / 1e3:.1f} kB"
+
+
+def _launch_summary(rec: dict[str, Any]) -> str:
+    """What ``ros2 launch`` prints: explore's summary in lockstep, the real-time run's few measures otherwise,
+    and what crossed the middleware."""
+    wire = rec["wire"]
+    head = (
+        _summary(rec)
+        if rec["lockstep"]
+        else f"explored {rec['map']} with {rec['robots']} robots ({rec['strategy']}, seed {rec['seed']}) in real time\n"
+        f"  coverage {100 * rec['coverage']:.2f}% in {rec['steps']} steps; ended: {rec['done_reason']}"
+    )
+    return (
+        f"{head}\n  through ROS 2: {wire['messages']} frontier messages, {_kb(wire['payload_bytes'])} "
+        f"({_kb(wire['serialized_bytes'])} serialized); {rec['centre']['decisions']} decisions, "
+        f"{rec['decision_ms_median']:.1f} ms median from the last message in to every goal out; "
+        f"{rec['centre']['aborts']} goals aborted; logs in {rec['logs']}"
+    )
 
 
 def _summary(rec: dict[str, Any]) -> str:

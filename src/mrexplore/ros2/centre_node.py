@@ -42,7 +42,7 @@ from mrexplore.ros2.deployment import Deployment
 from mrexplore.ros2.lockstep import DecisionReply, DecisionRequest
 from mrexplore.ros2.messages import goal_message, markers_message, team_map_message
 from mrexplore.ros2.robot_node import ACK, WHOLE_MAP, RobotNode, RobotNodeSettings
-from mrexplore.types import MrExploreError
+from mrexplore.types import CellState, MrExploreError
 
 __all__ = ["CentreSettings", "CentreNode", "run_centre_node", "WireCounts"]
 
@@ -130,11 +130,12 @@ class CentreNode:
             blacklist_s=dep.blacklist_s,
             replan_s=dep.replan_s,
             min_replan_s=dep.min_replan_s,
+            settle_s=dep.lost_after_s,
             seed=settings.seed,
         )
         self.wire = [WireCounts() for _ in range(n)]
         self.decision_ms: list[float] = []
-        """Per decision: the last message of its round in -> every goal out, ms."""
+        """Per decision: the last message of its round in (or the round's timeout) -> every goal out, ms."""
         self.warnings = 0
         self.finished: str | None = None
         self.paused = False
@@ -296,6 +297,7 @@ class CentreNode:
         for i in sorted(r.inbox):  # in robot order, as the simulator's link delivers them
             self.planner.receive(r.inbox[i], r.round)
         t_in = r.last_in or time.monotonic()
+        decisions = self.planner.decisions
         if r.request is not None:
             t_out = self._decide_lockstep(r.request)
         elif not self.paused:
@@ -306,10 +308,11 @@ class CentreNode:
             self._force = False
             if self.planner.done_reason is not None:
                 self.finished = self.planner.done_reason
-                self.node.get_logger().info(f"exploration finished: {_WHY[self.finished]}")
+                self.node.get_logger().info(f"exploration finished: {_WHY[self.finished]} ({self._summary()})")
         else:
             t_out = time.monotonic()
-        self.decision_ms.append((t_out - t_in) * 1e3)  # the last message in -> every goal out
+        if self.planner.decisions > decisions:  # rounds that only moved robots along their routes apart
+            self.decision_ms.append((t_out - t_in) * 1e3)  # the last message in -> every goal out
         self._publish_views()
 
     def _decide_lockstep(self, request: DecisionRequest) -> float:
@@ -347,6 +350,17 @@ class CentreNode:
             planner.done_reason = decision.done_reason
             self.node.get_logger().info(f"exploration finished: {_WHY[decision.done_reason]}")
         return t_out
+
+    def _summary(self) -> str:
+        """The team map in a few numbers, for the line that says why the exploration ended."""
+        state = self.planner.team.state()
+        un = self.planner.team.frontiers().un_mask & ~self.planner.blacklist()
+        heard = int((self.planner.team.last_heard >= 0).sum())
+        free, unknown = int((state == CellState.FREE).sum()), int((state == CellState.UNKNOWN).sum())
+        return (
+            f"team map: {free:,} free cells, {unknown:,} unknown, {int(un.sum()):,} frontier cells; "
+            f"{heard} of {len(self.robots)} robots heard"
+        )
 
     # -- goals and navigation --------------------------------------------------------------------------
     def _send_goal(self, i: int, goal_rc: NDArray[np.integer]) -> None:

@@ -19,7 +19,6 @@ import signal
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -42,51 +41,59 @@ _RESTART_AFTER_S = 1.0
 """A killed centre is started again this long after."""
 
 
+def _die_with_parent() -> None:  # pragma: no cover - runs in the child, before exec
+    """The child gets SIGTERM when the launcher dies, however it dies (Linux; elsewhere nothing)."""
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except OSError:
+        pass
+
+
 class TeamProcesses:
     """The processes of one launch by name, each with its command and log, started, killed, started again and
-    ended together."""
+    ended together. Used from one thread: each child gets SIGTERM when the thread that started it ends."""
 
     def __init__(self, work: Path) -> None:
         self.work = work
         self.commands: dict[str, list[str]] = {}
         self.processes: dict[str, subprocess.Popen[str]] = {}
         self._logs: list[IO[str]] = []
-        self._lock = threading.Lock()
 
     def start(self, name: str, cmd: list[str] | None = None, stdout: Any = subprocess.DEVNULL) -> subprocess.Popen[str]:
         """Start ``cmd`` (default: the command ``name`` ran before) with its stderr in ``name``.log."""
-        with self._lock:
-            cmd = cmd or self.commands[name]
-            log = open(self.work / f"{name}.log", "a")  # noqa: SIM115 - closed in stop_all
-            self._logs.append(log)
-            self.commands[name] = cmd
-            self.processes[name] = p = subprocess.Popen(cmd, stdout=stdout, stderr=log, text=True)
-            return p
+        cmd = cmd or self.commands[name]
+        log = open(self.work / f"{name}.log", "a")  # noqa: SIM115 - closed in stop_all
+        self._logs.append(log)
+        self.commands[name] = cmd
+        self.processes[name] = p = subprocess.Popen(
+            cmd, stdout=stdout, stderr=log, text=True, preexec_fn=_die_with_parent
+        )
+        return p
 
     def kill(self, name: str) -> None:
         """End ``name`` at once, as a crash or a power cut would (SIGKILL)."""
-        with self._lock:
-            p = self.processes[name]
-            if p.poll() is None:
-                p.kill()
-                p.wait()
+        p = self.processes[name]
+        if p.poll() is None:
+            p.kill()
+            p.wait()
 
     def stop_all(self) -> None:
         """End every process still running: SIGTERM, then SIGKILL after a grace period."""
-        with self._lock:
-            running = [p for p in self.processes.values() if p.poll() is None]
-            for p in running:
-                p.send_signal(signal.SIGTERM)
-            t0 = time.monotonic()
-            for p in running:
-                try:
-                    p.wait(timeout=max(0.1, _GRACE_S - (time.monotonic() - t0)))
-                except subprocess.TimeoutExpired:
-                    p.kill()
-                    p.wait()
-            for log in self._logs:
-                log.close()
-            self._logs.clear()
+        running = [p for p in self.processes.values() if p.poll() is None]
+        for p in running:
+            p.send_signal(signal.SIGTERM)
+        t0 = time.monotonic()
+        for p in running:
+            try:
+                p.wait(timeout=max(0.1, _GRACE_S - (time.monotonic() - t0)))
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+        for log in self._logs:
+            log.close()
+        self._logs.clear()
 
 
 def _sim_argv(argv: list[str], progress_file: Path) -> list[str]:
@@ -110,28 +117,34 @@ def _sim_step(progress_file: Path) -> int:
         return -1
 
 
-def _faults(
-    team: TeamProcesses, spec: MissionSpec, names: list[str], progress_file: Path, done: threading.Event
-) -> None:
-    """Strike the mission's scheduled faults at the processes as the simulation reaches their steps."""
-    faults = spec.mission_cfg.faults
-    due = sorted(
-        [(step, "robot", robot) for robot, step in faults.robot_failures]
-        + [(step, "centre", 0) for step in faults.centre_restarts]
-    )
-    while due and not done.is_set():
-        if _sim_step(progress_file) < due[0][0]:
-            time.sleep(0.02)
-            continue
-        step, kind, robot = due.pop(0)
+class _Faults:
+    """The mission's scheduled faults, struck at the processes as the simulation reaches their steps (from
+    the launcher's own thread: a process started from another thread would get the death signal when that
+    thread ends)."""
+
+    def __init__(self, team: TeamProcesses, spec: MissionSpec, names: list[str], progress_file: Path) -> None:
+        faults = spec.mission_cfg.faults
+        self.team, self.names, self.progress_file = team, names, progress_file
+        self.due = sorted(
+            [(step, "robot", robot) for robot, step in faults.robot_failures]
+            + [(step, "centre", 0) for step in faults.centre_restarts]
+        )
+        self._restart_at: float | None = None
+
+    def poll(self) -> None:
+        if self._restart_at is not None and time.monotonic() >= self._restart_at:
+            self._restart_at = None
+            self.team.start("centre")
+        if not self.due or _sim_step(self.progress_file) < self.due[0][0]:
+            return
+        step, kind, robot = self.due.pop(0)
         if kind == "robot":
-            print(f"step {step}: robot {names[robot]}'s node killed", file=sys.stderr)
-            team.kill(names[robot])
+            print(f"step {step}: robot {self.names[robot]}'s node killed", file=sys.stderr)
+            self.team.kill(self.names[robot])
         else:
             print(f"step {step}: centre killed; a new one starts in {_RESTART_AFTER_S:.0f} s", file=sys.stderr)
-            team.kill("centre")
-            time.sleep(_RESTART_AFTER_S)
-            team.start("centre")
+            self.team.kill("centre")
+            self._restart_at = time.monotonic() + _RESTART_AFTER_S
 
 
 def launch_team(
@@ -182,9 +195,13 @@ def launch_team(
         if getattr(args, flag):
             centre_cmd.append("--" + flag.replace("_", "-"))
     team = TeamProcesses(work)
+
+    def stop(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt  # SIGTERM ends the launch as Ctrl-C does: every process it started is ended
+
+    signal.signal(signal.SIGTERM, stop)
     progress_file = work / "progress.json"
     names = [r.name for r in deployment.robots]
-    done = threading.Event()
     try:
         team.start("centre", centre_cmd)
         if not args.direct_maps:
@@ -200,17 +217,17 @@ def launch_team(
             f"centre ({'lockstep' if args.lockstep else 'real time'}); ROS domain {domain}; logs in {work}",
             file=sys.stderr,
         )
-        striker = threading.Thread(target=_faults, args=(team, spec, names, progress_file, done), daemon=True)
-        striker.start()
-        out, _ = sim.communicate()
-        done.set()
-        striker.join()
+        faults = _Faults(team, spec, names, progress_file)
+        while sim.poll() is None:
+            faults.poll()
+            time.sleep(0.02)
+        assert sim.stdout is not None
+        out = sim.stdout.read()
         if sim.returncode != 0:
             tail = (work / "sim.log").read_text()[-600:].strip().splitlines()
             raise MrExploreError(f"the simulation failed ({tail[-1] if tail else 'no output'}); logs in {work}")
         sim_record = json.loads(out.strip().splitlines()[-1])
     finally:
-        done.set()
         team.stop_all()
     record_file = work / "centre.json"
     if not record_file.is_file():

@@ -26,6 +26,7 @@ LOOPBACK_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
       <transport_id>loopback_udp</transport_id>
       <type>UDPv4</type>
       <interfaceWhiteList><address>127.0.0.1</address></interfaceWhiteList>
+      <maxInitialPeersRange>32</maxInitialPeersRange>
     </transport_descriptor>
   </transport_descriptors>
   <participant profile_name="mrexplore_loopback" is_default_profile="true">
@@ -36,7 +37,9 @@ LOOPBACK_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
   </participant>
 </profiles>
 """
-"""A Fast DDS profile whose one transport is UDP on 127.0.0.1."""
+"""A Fast DDS profile whose one transport is UDP on 127.0.0.1. Discovery on loopback is by unicast to the
+first participants' ports; Fast DDS's default reaches 4 participants a machine, too few for a launch of a
+simulator, a centre and a robot node per robot: 32 here."""
 
 
 def keep_on_loopback(domain_id: int | None = None) -> dict[str, str]:

@@ -45,7 +45,7 @@ __all__ = ["SimSettings", "SimNode", "run_sim_node"]
 _REQUEST_AGAIN_S = 2.0
 _LOG_EVERY_S = 5.0
 _FIRST_GOALS_S = 60.0
-"""Real time: the simulation starts once every robot has a goal, or after this long."""
+"""Real time: the simulation starts once every robot has a goal; it gives up after this long."""
 _STATUS = {"executing": 2, "succeeded": 4, "aborted": 6}
 
 
@@ -306,12 +306,17 @@ def run_sim_node(settings: SimSettings, loopback: bool = True) -> dict[str, Any]
         sim = sim_node.mission.sim
         period = 1.0 / settings.speed
         sim_node.publish_world()
-        t0 = published = time.monotonic()  # the clock starts once every robot has its first goal, or after a while
+        t0 = published = time.monotonic()  # the clock starts once every robot has its first goal
         while not sim_node.every_robot_has_a_goal() and time.monotonic() - t0 < _FIRST_GOALS_S:
             rclpy.spin_once(node, timeout_sec=0.1)
             if time.monotonic() - published > 1.0:
                 sim_node.publish_world()  # for robot nodes that started late
                 published = time.monotonic()
+        if not sim_node.every_robot_has_a_goal():
+            raise MrExploreError(
+                f"no goal from the centre for every robot within {_FIRST_GOALS_S:.0f} s; start "
+                "'mrexplore ros2 centre' and a robot node per robot on the same ROS domain"
+            )
         next_step = time.monotonic()
         while _finished(sim_node.centre_status) is None and sim.steps < spec.mission_cfg.max_steps:
             rclpy.spin_once(node, timeout_sec=max(0.0, next_step - time.monotonic()))
