@@ -54,3 +54,10 @@ def test_real_time_team_finishes_the_map(fault: list[str]) -> None:
         assert run["robots_lost"] == 1
     if fault and fault[0] == "--message-loss":
         assert run["wire"]["messages"] > 0
+
+
+def test_direct_maps_need_no_robot_node() -> None:
+    alone = mrexplore("explore", *MAP, "--strategy", "utility")
+    launched = mrexplore("ros2", "launch", *MAP, "--strategy", "utility", "--lockstep", "--direct-maps")
+    assert {k: launched[k] for k in SAME} == {k: alone[k] for k in SAME}
+    assert launched["wire"]["payload_bytes"] == alone["bytes_sparse_delta"] and launched["map_mismatches"] == 0
