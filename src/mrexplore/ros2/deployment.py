@@ -8,7 +8,7 @@ Example file (every field but ``robots`` has a default; a robot given as a bare 
     round_period_s: 1.0            # the centre asks for the robots' maps this often (real time)
     round_timeout_s: 0.5           # and decides on what arrived within this
     lost_after_s: 5.0              # a robot silent this long gets no goal (its map stays)
-    blacklist_s: 30.0              # an aborted goal's area is kept from the robots this long
+    blacklist_s: 30.0              # an aborted goal's clusters are kept from that robot this long
     replan_s: 10.0                 # a full decision at least this often
     min_replan_s: 1.0              # a goal already seen is driven on to until this passed since a decision
     reliable: true                 # QoS of the frontier messages (false: best effort)
