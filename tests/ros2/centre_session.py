@@ -112,7 +112,7 @@ def main() -> None:
                 spin(0.1)
             return len(goals) >= count
 
-        result["first_goal"] = wait_goal(1, 120)
+        result["first_goal"] = wait_goal(1, 300)  # a first run compiles the kernels: minutes
         spin(0.5)
         # The team map and markers, read back.
         agent = RobotAgent(0, (12, 20), PreprocessConfig(), SensorConfig())

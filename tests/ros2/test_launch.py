@@ -34,10 +34,7 @@ def test_lockstep_through_ros2_equals_explore(strategy: str) -> None:
     assert launched["map_mismatches"] == 0  # the centre decided on the very grid the simulator rebuilt
     wire = launched["wire"]
     assert wire["payload_bytes"] == alone["bytes_sparse_delta"]  # every message's bytes, as counted
-    assert wire["messages"] == alone["messages_sent"]
-    assert (
-        wire["late"] == 0
-    )  # (repeats, answers to a round asked again while the first answer was on its way, are apart)
+    assert wire["messages"] == alone["messages_sent"]  # (a robot asked again while busy answers again: apart)
     assert 12 <= wire["overhead_bytes_per_message"] <= 24  # CDR's header and padding, per message
 
 

@@ -44,8 +44,9 @@ __all__ = ["SimSettings", "SimNode", "run_sim_node"]
 
 _REQUEST_AGAIN_S = 2.0
 _LOG_EVERY_S = 5.0
-_FIRST_GOALS_S = 60.0
-"""Real time: the simulation starts once every robot has a goal; it gives up after this long."""
+_FIRST_GOALS_S = 300.0
+"""Real time: the simulation starts once every robot has a goal; it gives up after this long (a first run on
+a machine compiles the kernels in every process: a minute or more on two cores)."""
 _STATUS = {"executing": 2, "succeeded": 4, "aborted": 6}
 
 
@@ -59,7 +60,7 @@ class SimSettings:
     lockstep: bool = False
     speed: float = 10.0
     """Simulation steps a second in real time."""
-    reply_timeout_s: float = 120.0
+    reply_timeout_s: float = 300.0
     """Lockstep: how long the simulator waits for the centre's answer before it gives up."""
     progress_file: Path | None = None
     """Where the simulation's step and coverage are kept up to date (JSON), for a launcher's faults."""
