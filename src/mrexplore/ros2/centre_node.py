@@ -49,6 +49,9 @@ __all__ = ["CentreSettings", "CentreNode", "run_centre_node", "WireCounts"]
 _NAV_STATES = {2: NavState.ACTIVE, 4: NavState.REACHED, 5: NavState.ABORTED, 6: NavState.ABORTED}
 """action_msgs/GoalStatus: executing, succeeded, canceled, aborted."""
 _ASK_AGAIN_S = 0.5
+_SEND_AGAIN_S = 1.0
+"""A goal Nav2 has not taken (no new id in its status) is sent again this often: a message published before
+the robot's subscription was matched is lost, and a robot without its goal would wait for ever."""
 """A robot that has not answered a round is asked again this often (it may still be starting)."""
 
 
@@ -146,6 +149,11 @@ class CentreNode:
         self._force = True
         self._goal_stamps: list[set[tuple[int, int]]] = [set() for _ in range(n)]
         self._goal_sent_ns = [0] * n
+        self._goal_out: list[NDArray[np.int32] | None] = [None] * n
+        """Each robot's goal as last sent (team grid)."""
+        self._untaken_since: list[float | None] = [None] * n
+        """When each robot's goal was last sent while Nav2 has not taken it (None: taken, or none)."""
+        self.goals_resent = 0
         self._goal_id: list[bytes | None] = [None] * n
         self._known_ids: list[set[bytes]] = [set() for _ in range(n)]
         self._warned_ids: set[bytes] = set()
@@ -226,7 +234,14 @@ class CentreNode:
             elif now >= r.next_ask:
                 self._ask()
             return
-        if not self.settings.lockstep and now >= self._next_round:
+        if self.settings.lockstep:
+            return
+        for i, since in enumerate(self._untaken_since):
+            goal = self._goal_out[i]
+            if since is not None and goal is not None and now - since >= _SEND_AGAIN_S:
+                self.goals_resent += 1
+                self._send_goal(i, goal, again=True)
+        if now >= self._next_round:
             self._next_round = now + self.settings.deployment.round_period_s
             self._open(self.round + 1, (0, 0), set(range(len(self.robots))), None)
 
@@ -363,7 +378,9 @@ class CentreNode:
         )
 
     # -- goals and navigation --------------------------------------------------------------------------
-    def _send_goal(self, i: int, goal_rc: NDArray[np.integer]) -> None:
+    def _send_goal(self, i: int, goal_rc: NDArray[np.integer], again: bool = False) -> None:
+        """Publish robot i's goal; ``again``: the same goal once more, as Nav2 has not taken it yet (a message
+        published before the subscriber was matched is lost)."""
         robot, team = self.robots[i], self.settings.team
         here = self.planner.team.positions_rc[i]
         gx, gy = team.rc_to_xy((int(goal_rc[0]), int(goal_rc[1])))
@@ -372,8 +389,11 @@ class CentreNode:
         yaw = math.atan2(gy - hy, gx - hx) - robot.offset.yaw_rad
         stamp = self.node.get_clock().now().to_msg()
         self._goal_stamps[i].add((int(stamp.sec), int(stamp.nanosec)))
-        self._goal_sent_ns[i] = int(stamp.sec) * 10**9 + int(stamp.nanosec)
-        self._goal_id[i] = None
+        if not again:
+            self._goal_sent_ns[i] = int(stamp.sec) * 10**9 + int(stamp.nanosec)
+            self._goal_id[i] = None
+            self._goal_out[i] = np.asarray(goal_rc, dtype=np.int32).copy()
+        self._untaken_since[i] = time.monotonic()
         self._goals[i].publish(goal_message(float(x), float(y), yaw, robot.frame, stamp))
 
     def _on_goal_topic(self, i: int, msg: Any) -> None:
@@ -390,6 +410,7 @@ class CentreNode:
             stamp_ns = int(status.goal_info.stamp.sec) * 10**9 + int(status.goal_info.stamp.nanosec)
             if self._goal_id[i] is None and gid not in self._known_ids[i] and stamp_ns >= self._goal_sent_ns[i] > 0:
                 self._goal_id[i] = gid  # the first new goal Nav2 took after ours was sent
+                self._untaken_since[i] = None
                 self._known_ids[i].add(gid)
             if gid == self._goal_id[i]:
                 state = _NAV_STATES.get(int(status.status))
@@ -461,6 +482,7 @@ class CentreNode:
             "clusters": 0 if planner.decision is None else len(planner.decision.clusters),
             "decisions": planner.decisions,
             "aborts": planner.aborts,
+            "goals_resent": self.goals_resent,
             "paused": self.paused,
             "finished": self.finished or planner.done_reason,
         }

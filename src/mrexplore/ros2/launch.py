@@ -240,7 +240,7 @@ def launch_team(
         "lockstep": bool(args.lockstep),
         "map_mismatches": sim_record.get("map_mismatches"),
         "wire": wire_summary(centre["wire"]),
-        "centre": {k: centre[k] for k in ("decisions", "aborts", "warnings", "finished")},
+        "centre": {k: centre.get(k) for k in ("decisions", "aborts", "goals_resent", "warnings", "finished")},
         "decision_ms_median": _median(centre.get("decision_ms", [])),
         "logs": str(work),
     }
