@@ -459,15 +459,7 @@ def _ros2(args: argparse.Namespace, argv: list[str]) -> str:
 
     if args.strategy == "oracle":
         raise MrExploreError(NO_ORACLE)  # before the middleware starts
-    strategy = make_strategy(
-        args.strategy,
-        run.global_planning,
-        run.preprocess,
-        run.local_planning,
-        local=not args.no_local,
-        policy=args.policy,
-        coscan_cfg=run.coscan,
-    )
+    strategy = _strategy(args, run)
     if args.record:
         _check_output(args.record, "--record")
     record = Path(args.record) if args.record else None
@@ -724,12 +716,9 @@ def _train(args: argparse.Namespace) -> str:
     )
 
 
-def _mission_setup(args: argparse.Namespace) -> tuple[RunConfig, Any, Any, NDArray[np.int32] | None]:
-    """The run's settings, strategy, map and starts from explore's flags (shared by ``ros2 sim`` and
-    ``ros2 launch``), each checked before any work."""
-    run = _run_config(args)
-    sim_cfg = run.sim
-    strategy = make_strategy(
+def _strategy(args: argparse.Namespace, run: RunConfig) -> Any:
+    """The strategy the flags name (``--strategy``, ``--no-local``, ``--policy``) with the run's settings."""
+    return make_strategy(
         args.strategy,
         run.global_planning,
         run.preprocess,
@@ -738,6 +727,14 @@ def _mission_setup(args: argparse.Namespace) -> tuple[RunConfig, Any, Any, NDArr
         policy=args.policy,
         coscan_cfg=run.coscan,
     )
+
+
+def _mission_setup(args: argparse.Namespace) -> tuple[RunConfig, Any, Any, NDArray[np.int32] | None]:
+    """The run's settings, strategy, map and starts from explore's flags (shared by ``ros2 sim`` and
+    ``ros2 launch``), each checked before any work."""
+    run = _run_config(args)
+    sim_cfg = run.sim
+    strategy = _strategy(args, run)
     _check_failures(run, sim_cfg.robots)
     truth = load_map(args.map, run.map)
     starts = None

@@ -48,17 +48,9 @@ class LossyRelay:
 
 def run_relay(deployment: Deployment, loss: float, seed: int, loopback: bool = True) -> str:
     """Serve until a signal ends the relay; returns what it forwarded and dropped."""
-    from mrexplore.ros2.robot_node import start_rclpy
+    from mrexplore.ros2.robot_node import serve, start_rclpy
 
     rclpy = start_rclpy(loopback)
     node = rclpy.create_node("mrexplore_relay")
-    relay = LossyRelay(node, deployment, loss, seed)
-    try:
-        while True:
-            rclpy.spin_once(node, timeout_sec=0.2)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    relay = serve(rclpy, node, lambda: LossyRelay(node, deployment, loss, seed), f"relay losing {loss:.0%} ready")
     return f"relay forwarded {relay.forwarded} and dropped {relay.dropped} frontier messages"

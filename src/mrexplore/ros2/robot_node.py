@@ -37,7 +37,7 @@ from mrexplore.ros2.deployment import POSE_TYPES, RobotEntry
 from mrexplore.ros2.messages import bytes_message, grid_data, pose_xyyaw
 from mrexplore.types import MrExploreError
 
-__all__ = ["RobotNodeSettings", "RobotNode", "run_robot_node", "start_rclpy", "ACK", "WHOLE_MAP"]
+__all__ = ["RobotNodeSettings", "RobotNode", "run_robot_node", "start_rclpy", "serve", "ACK", "WHOLE_MAP"]
 
 ACK = 0
 """Reply kind: the centre holds the robot's message of that round."""
@@ -234,13 +234,22 @@ def run_robot_node(settings: RobotNodeSettings, loopback: bool = True) -> None:
     machine."""
     rclpy = start_rclpy(loopback)
     node = rclpy.create_node(f"mrexplore_{settings.name}")
+    serve(rclpy, node, lambda: RobotNode(node, settings), f"robot {settings.name} ready")
+
+
+def serve(rclpy: Any, node: Any, build: Any, ready: str) -> Any:
+    """Build a node's adapter with ``build()``, say ``ready`` and spin until a signal ends it (SIGINT or
+    SIGTERM, raised within a bounded wait); the node and rclpy are shut down however it ends. Returns what
+    ``build`` made (None where building failed)."""
+    made = None
     try:
-        RobotNode(node, settings)
-        node.get_logger().info(f"robot {settings.name} ready")
-        while True:  # a bounded wait, so that a signal's KeyboardInterrupt is raised within it
+        made = build()
+        node.get_logger().info(ready)
+        while True:
             rclpy.spin_once(node, timeout_sec=0.2)
     except KeyboardInterrupt:
         pass
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
+    return made
