@@ -145,6 +145,8 @@ class CentreNode:
         # Rounds of a fresh centre start past any a robot may have answered before a restart.
         self.round = -1 if settings.lockstep else int(time.time() * 10) % 2**31
         self._round: _Round | None = None
+        self._last_reply: str | None = None
+        """The last lockstep decision's JSON, sent again where the simulator asks for that round again."""
         self._next_round = 0.0
         self._force = True
         self._goal_stamps: list[set[tuple[int, int]]] = [set() for _ in range(n)]
@@ -258,8 +260,6 @@ class CentreNode:
         if self._round is not None:
             return  # that round is being collected
         self._open(request.round, request.stamp, set(request.sending), request)
-
-    _last_reply: str | None = None
 
     def _on_frontiers(self, i: int, raw: bytes) -> None:
         from rclpy.serialization import deserialize_message

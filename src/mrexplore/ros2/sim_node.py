@@ -29,13 +29,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mrexplore.config import GridThresholds
+from mrexplore.maps.occupancy_grid import FrameOffset, state_in_team_frame
 from mrexplore.mission import Mission, MissionResult, MissionSpec
 from mrexplore.paths.astar import astar_path
 from mrexplore.pipeline import Decision, DecisionInput
 from mrexplore.preprocessing.frontiers import detect_frontiers
 from mrexplore.ros2.deployment import Deployment
 from mrexplore.ros2.lockstep import DecisionReply, DecisionRequest, state_digest
-from mrexplore.ros2.messages import pose_message, team_map_message
+from mrexplore.ros2.messages import grid_data, pose_message, team_map_message
 from mrexplore.sim.belief import classify
 from mrexplore.sim.world import ExplorationSim
 from mrexplore.types import CellState, MrExploreError
@@ -237,11 +239,10 @@ class SimNode:
         return np.zeros((0, 2), np.int32)
 
     def _on_team_map(self, msg: Any) -> None:
-        if msg.info.width == self.frame.width and msg.info.height == self.frame.height:
-            values = np.frombuffer(bytes(msg.data), dtype=np.int8).reshape(self.frame.height, self.frame.width)
-            self._team_map = np.where(
-                values < 0, CellState.UNKNOWN, np.where(values >= 50, CellState.OCCUPIED, CellState.FREE)
-            ).astype(np.uint8)[::-1]  # rows along +y in the message, row 0 at the top here
+        try:  # read as any robot's map is: checked, thresholded, placed in the simulator's grid
+            self._team_map = state_in_team_frame(grid_data(msg), FrameOffset(), self.frame, GridThresholds())
+        except MrExploreError as exc:
+            self.node.get_logger().warning(f"team map dropped: {exc}")
 
     def every_robot_has_a_goal(self) -> bool:
         return all(nav is not None for nav in self._nav)
