@@ -13,6 +13,7 @@ import pytest
 import torch
 import yaml
 from PIL import Image
+from policy_edit import edited_policy
 
 from mrexplore.cli import main, strict_json
 from mrexplore.config import LearnedConfig, MapConfig, RunConfig, config_from_dict
@@ -249,33 +250,39 @@ def _refused(policy: Path) -> str:
 
 
 def test_hostile_policy_files(tmp_path, capsys) -> None:
-    (tmp_path / "text.pt").write_text("not a checkpoint")
-    with pytest.raises(MrExploreError, match=r"is not a mrexplore policy \(UnpicklingError\); retrain it"):
-        load_policy(tmp_path / "text.pt")
+    (tmp_path / "text.npz").write_text("not a checkpoint")
+    with pytest.raises(MrExploreError, match=r"is not a mrexplore policy \(not an archive\); retrain it"):
+        load_policy(tmp_path / "text.npz")
     net = MultiGraphNet(LearnedConfig(), VALUE_INPUTS)
     with torch.no_grad():
         next(iter(net.parameters())).fill_(float("nan"))
-    save_policy(tmp_path / "nan.pt", net)
-    message = _refused(tmp_path / "nan.pt")
-    assert "hold NaN or infinite values" in message and message.endswith("; retrain it")
-    blob = torch.load(tmp_path / "nan.pt", weights_only=True)
-    blob["learned_config"]["hidden"] = 10**6  # would allocate terabytes
-    torch.save(blob, tmp_path / "huge.pt")
-    assert _refused(tmp_path / "huge.pt") == (
-        f"policy file {tmp_path / 'huge.pt'} does not fit this network (hidden must be in [4, 1024], got 1000000); "
+    save_policy(tmp_path / "nan.npz", net)
+    assert _refused(tmp_path / "nan.npz") == (
+        f"policy file {tmp_path / 'nan.npz'} has weights robot_in.0.weight holding NaN or infinite values; retrain it"
+    )
+    good = tmp_path / "good.npz"
+    save_policy(good, MultiGraphNet(LearnedConfig(), VALUE_INPUTS))
+
+    def huge(h: dict) -> None:
+        h["learned_config"]["hidden"] = 10**6  # would allocate terabytes
+
+    edited_policy(good, tmp_path / "huge.npz", header=huge)
+    assert _refused(tmp_path / "huge.npz") == (
+        f"policy file {tmp_path / 'huge.npz'} does not fit this network (hidden must be in [4, 1024], got 1000000); "
         "retrain it"
     )
-    good = tmp_path / "good.pt"
-    save_policy(good, MultiGraphNet(LearnedConfig(), VALUE_INPUTS))
-    blob = torch.load(good, weights_only=True)
-    next(iter(blob["state_dict"].values())).view(-1)[0] += 0.5  # a changed weight, still finite
-    torch.save(blob, tmp_path / "changed.pt")
-    assert _refused(tmp_path / "changed.pt") == (
-        f"policy file {tmp_path / 'changed.pt'} does not fit this network (weights do not match the digest saved "
-        "with them: the file is corrupted); retrain it"
+
+    def changed(w: dict) -> None:
+        next(iter(w.values())).reshape(-1)[0] += 0.5  # a changed weight, still finite
+
+    edited_policy(good, tmp_path / "changed.npz", weights=changed)
+    assert _refused(tmp_path / "changed.npz") == (
+        f"policy file {tmp_path / 'changed.npz'} is corrupted: its weights do not match the digest saved with them; "
+        "retrain it"
     )
-    assert main(["explore", "--map", "generated:3", *FAST, "--policy", str(tmp_path / "huge.pt")]) == 2
-    assert "does not fit this network" in _err(capsys)
+    for path in (tmp_path / "huge.npz", tmp_path / "changed.npz"):
+        assert main(["explore", "--map", "generated:3", *FAST, "--policy", str(path)]) == 2
+        assert f"policy file {path} " in _err(capsys)
 
 
 @pytest.mark.parametrize("script", ["profile_decision.py", "step_and_decision.py", "fields.py", "meanshift.py"])

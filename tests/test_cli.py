@@ -175,12 +175,12 @@ def test_train_smoke_then_explore_with_that_policy(tmp_path, capsys) -> None:
     assert main(args) == 0
     captured = capsys.readouterr()
     assert "kept stage" in captured.out and "procedural floor plans only" in captured.err
-    assert (out / "policy.pt").is_file() and (out / "log.csv").is_file()
-    assert main(["explore", *FAST, "--strategy", "hier", "--policy", str(out / "policy.pt"), "--json"]) == 0
+    assert (out / "policy.npz").is_file() and (out / "log.csv").is_file()
+    assert main(["explore", *FAST, "--strategy", "hier", "--policy", str(out / "policy.npz"), "--json"]) == 0
     rec = json.loads(capsys.readouterr().out)
     import hashlib
 
-    assert rec["policy"]["sha256"] == hashlib.sha256((out / "policy.pt").read_bytes()).hexdigest()
+    assert rec["policy"]["sha256"] == hashlib.sha256((out / "policy.npz").read_bytes()).hexdigest()
     assert rec["coverage"] >= 0.99
 
 
@@ -211,7 +211,7 @@ def test_ncm_explores_and_benches_with_a_given_policy(tmp_path, capsys) -> None:
     from mrexplore.global_planning.learned.ncm_network import NcmNet
 
     torch.manual_seed(0)
-    ncm = tmp_path / "ncm.pt"
+    ncm = tmp_path / "ncm.npz"
     save_policy(ncm, NcmNet(), {"stage": "baseline"})
     for name in ("ncm", "ncm-sampled", "ncm-matched"):
         assert main(["explore", *FAST, "--strategy", name, "--policy", str(ncm), "--json"]) == 0

@@ -33,7 +33,7 @@ def _lint(tree: Path) -> subprocess.CompletedProcess[str]:
 @pytest.fixture()
 def tree(tmp_path: Path) -> Path:
     """A copy of the package and its pyproject, to break."""
-    shutil.copytree(ROOT / "src" / "mrexplore", tmp_path / "src" / "mrexplore", ignore=shutil.ignore_patterns("*.pt"))
+    shutil.copytree(ROOT / "src" / "mrexplore", tmp_path / "src" / "mrexplore", ignore=shutil.ignore_patterns("*.npz"))
     shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
     return tmp_path
 

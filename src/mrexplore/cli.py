@@ -51,7 +51,7 @@ DEFAULT_STRATEGY = "hier"
 COMMITMENT_HELP = "goal hysteresis in [0, 1] (1: none; default: 0.5 for nearest/utility, 1 for hier)"
 POLICY_HELP = (
     "weights of the learned strategies (hier, ncm), written by 'mrexplore train': FILE, or KIND=FILE pairs "
-    "(hier=A.pt,ncm=B.pt) where a run has both (default: the shipped policies)"
+    "(hier=A.npz,ncm=B.npz) where a run has both (default: the shipped policies)"
 )
 MIN_REPLAN_HELP = (
     "steps a robot whose goal was seen drives on before the team replans "
@@ -260,7 +260,7 @@ def build_parser() -> argparse.ArgumentParser:
         "train",
         help="train the learned global layer (imitation of a lookahead expert, then PPO) or the ncm baseline (PPO)",
     )
-    tr.add_argument("--out", required=True, help="folder for policy.pt, checkpoints, log.csv and stages.csv")
+    tr.add_argument("--out", required=True, help="folder for policy.npz, checkpoints, log.csv and stages.csv")
     tr.add_argument(
         "--strategy",
         choices=TRAINABLE,
@@ -529,7 +529,7 @@ def _add_report(sub: Any) -> None:
     tt.add_argument("--workers", type=_COUNT, default=2, help="workers of the table (default 2)")
     tt.add_argument("--strategies", default=",".join(TABLE_I), help="comma-separated (default Table I's seven)")
     po = kinds.add_parser("policies", help="policy files against the heuristic on maps no dev set holds")
-    po.add_argument("policies", nargs="+", help="policy files (.pt), the first is the yardstick")
+    po.add_argument("policies", nargs="+", help="policy files (.npz), the first is the yardstick")
     po.add_argument("--fresh", type=_SEED, default=0, help="N fresh varied: plans instead of the validation maps")
     po.add_argument("--robots", type=_COUNT, default=None, help="robots per episode (default: train.val_robots)")
     po.add_argument("--workers", type=_WORKERS, default=0, help="worker processes (default: one per core)")
@@ -574,6 +574,7 @@ def _report(args: argparse.Namespace, argv: Sequence[str]) -> str:
         return table_time(_folders(args.runs), args.seeds, args.workers, [s for s in args.strategies.split(",") if s])
     import csv
 
+    _need_torch()
     from mrexplore.training.compare import compare_policies
 
     lines, per_map = compare_policies(
@@ -682,9 +683,21 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
     return f"{ran} episodes run, {len(specs) - ran} already done; wrote {out / 'results.csv'} and {out / 'report.md'}"
 
 
-def _train(args: argparse.Namespace) -> str:
-    from mrexplore.training.trainer import train
+TORCH_MISSING = (
+    "training needs torch, which is not installed: pip install 'mrexplore[train]' (on a machine without an "
+    "NVIDIA GPU, first: pip install torch --index-url https://download.pytorch.org/whl/cpu)"
+)
 
+
+def _need_torch() -> None:
+    """One line naming the fix where torch cannot be imported (the commands that train need it)."""
+    try:
+        import torch  # noqa: F401
+    except ImportError:
+        raise MrExploreError(TORCH_MISSING) from None
+
+
+def _train(args: argparse.Namespace) -> str:
     run = _run_config(args)
     if args.strategy is not None:
         run = replace(run, train=replace(run.train, strategy=args.strategy))
@@ -693,6 +706,9 @@ def _train(args: argparse.Namespace) -> str:
     if args.episodes is not None and args.episodes < 1:
         raise MrExploreError(f"--episodes must be >= 1, got {args.episodes}")
     _check_output(args.out, "--out", folder=True)
+    _need_torch()
+    from mrexplore.training.trainer import train
+
     result = train(
         run.train,
         Path(args.out),

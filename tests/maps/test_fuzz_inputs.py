@@ -92,7 +92,7 @@ def test_mutations_of_the_shipped_policy(tmp_path) -> None:
     rng = np.random.default_rng(0)
     refused = 0
     for i in range(12):
-        p = tmp_path / f"p{i}.pt"
+        p = tmp_path / f"p{i}.npz"
         p.write_bytes(mutate(data, rng))
         try:
             load_policy(p)

@@ -54,7 +54,7 @@ def test_stop_and_resume_runs_every_stage_once(tmp_path: Path) -> None:
     assert [r["stage"] for r in _rows(out / "stages.csv")] == ["baseline", "dagger0", "ppo0"]
     state = torch.load(out / "state.pt", weights_only=True)
     assert state["state"]["stage"] == 3 and state["state"]["episodes"] == 2
-    policy = load_policy(out / "policy.pt")
+    policy = load_policy(out / "policy.npz")
     assert policy.meta["meta"]["stage"] == second.best_stage
 
 
@@ -77,7 +77,7 @@ def test_policy_search_moves_the_edge_weights_to_its_elites_and_resumes(tmp_path
     second = train(cfg, out, None, workers=1, seed=5, resume=True)
     assert [r["stage"] for r in second.stages] == ["baseline", "search0", "search1"]
     assert torch.load(out / "state.pt", weights_only=True)["state"]["episodes"] == 6
-    kept = load_policy(out / "policy.pt")
+    kept = load_policy(out / "policy.npz")
     assert kept.meta["meta"]["stage"] == second.best_stage
 
 
@@ -222,7 +222,7 @@ def test_ncm_trains_with_the_same_stages_logs_and_resume(tmp_path: Path) -> None
     assert [r["stage"] for r in log] == ["baseline", "ppo0", "ppo1"]
     assert all(r["kl"] and r["entropy"] and r["value_loss"] and r["return_mean"] for r in log[1:])
     assert all(float(r["val_sampled_steps_mean"]) > 0 and float(r["val_steps_mean"]) > 0 for r in log)
-    policy = load_ncm_policy(out / "policy.pt")  # the actor alone; the critic stays in state.pt
+    policy = load_ncm_policy(out / "policy.npz")  # the actor alone; the critic stays in state.pt
     assert policy.meta["meta"]["stage"] == second.best_stage
     assert policy.meta["meta"]["chosen_by"] == "val_sampled_steps_mean"  # NCM's own evaluation samples
     best = min(second.stages, key=lambda r: r["val_sampled_steps_mean"])["val_sampled_steps_mean"]
@@ -232,7 +232,7 @@ def test_ncm_trains_with_the_same_stages_logs_and_resume(tmp_path: Path) -> None
         MrExploreError,
         match=r"is for the ncm strategy, not hier; pass one written by .mrexplore train --strategy hier.",
     ):
-        load_policy(out / "policy.pt")
+        load_policy(out / "policy.npz")
 
 
 def test_ncm_trains_through_ray_as_through_processes(tmp_path: Path) -> None:

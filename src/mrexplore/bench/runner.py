@@ -107,7 +107,7 @@ class EpisodeSpec:
 
 @functools.lru_cache(maxsize=16)
 def _policy_sha(kind: str, policy: str | None) -> str:
-    from mrexplore.global_planning.learned.checkpoint import default_ncm_policy_path, default_policy_path, file_sha256
+    from mrexplore.global_planning.learned.policy_file import default_ncm_policy_path, default_policy_path, file_sha256
 
     path = Path(policy) if policy else (default_ncm_policy_path() if kind == "ncm" else default_policy_path())
     return file_sha256(path) if path.is_file() else ""

@@ -12,8 +12,10 @@ Examples
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig
 from mrexplore.global_planning.classical import GeodesicPlanner, NearestPlanner, UtilityPlanner
@@ -96,8 +98,8 @@ def policy_for(name: str, policy: str | None) -> str | None:
 
     Examples
     --------
-    >>> policy_for("ncm-sampled", "hier=a.pt,ncm=b.pt"), policy_for("hier", "ncm=b.pt"), policy_for("hier", "c.pt")
-    ('b.pt', None, 'c.pt')
+    >>> policy_for("ncm-sampled", "hier=a.npz,ncm=b.npz"), policy_for("hier", "ncm=b.npz"), policy_for("hier", "c.npz")
+    ('b.npz', None, 'c.npz')
     """
     kind = strategy_spec(name).policy_kind
     if policy is None or kind is None:
@@ -176,15 +178,33 @@ def _hier_heuristic(c: PipelineConfigs, policy: str | None) -> ExplorationPipeli
     )
 
 
+INFERENCE_ENV = "MREXPLORE_INFERENCE"
+"""``numpy`` (default): the learned strategies decide with the NumPy networks, no torch; ``torch``: with the
+torch modules they were trained as (to compare the two, ``benchmarks/inference_parity.py``)."""
+
+
+def _torch_inference() -> bool:
+    value = os.environ.get(INFERENCE_ENV, "numpy")
+    if value not in ("numpy", "torch"):
+        raise MrExploreError(f"{INFERENCE_ENV}={value!r} is not an inference backend; set it to numpy or torch")
+    return value == "torch"
+
+
 def _hier(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
-    # The paper's three layers with the learned global layer (mGNN affinities, Hungarian decoding); torch is
-    # imported here only, so that every other strategy runs without it.
+    # The paper's three layers with the learned global layer (mGNN affinities, Hungarian decoding).
     from pathlib import Path
 
-    from mrexplore.global_planning.learned.checkpoint import load_policy
     from mrexplore.global_planning.learned.policy import LearnedPlanner
+    from mrexplore.global_planning.learned.policy_file import LoadedPolicy, load_policy_np
 
-    loaded = load_policy(Path(policy) if policy else None)
+    path = Path(policy) if policy else None
+    loaded: LoadedPolicy[Any]
+    if _torch_inference():
+        from mrexplore.global_planning.learned.checkpoint import load_policy
+
+        loaded = load_policy(path)
+    else:
+        loaded = load_policy_np(path)
     info = {"path": str(loaded.path), "sha256": loaded.sha256, "code_version": str(loaded.meta["code_version"])}
     planner = LearnedPlanner(loaded.net, c.global_)
     router = LocalRouter(c.local, c.preprocess)
@@ -195,13 +215,20 @@ def _hier(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
 def _ncm(name: str, sample: bool = False, match: bool = False) -> Factory:
     def make(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
         # NeuralCoMapping re-implemented: no hysteresis (it replans every robot every decision), no local
-        # layer (each robot drives to its node); torch is imported here only, as for hier.
+        # layer (each robot drives to its node).
         from pathlib import Path
 
-        from mrexplore.global_planning.learned.checkpoint import load_ncm_policy
-        from mrexplore.global_planning.learned.ncm_network import NcmPlanner
+        from mrexplore.global_planning.learned.ncm_planner import NcmPlanner
+        from mrexplore.global_planning.learned.policy_file import LoadedPolicy, load_ncm_policy_np
 
-        loaded = load_ncm_policy(Path(policy) if policy else None)
+        path = Path(policy) if policy else None
+        loaded: LoadedPolicy[Any]
+        if _torch_inference():
+            from mrexplore.global_planning.learned.checkpoint import load_ncm_policy
+
+            loaded = load_ncm_policy(path)
+        else:
+            loaded = load_ncm_policy_np(path)
         info = {"path": str(loaded.path), "sha256": loaded.sha256, "code_version": str(loaded.meta["code_version"])}
         planner = NcmPlanner(loaded.net, sample=sample, name=name, match=match)
         return NcmPipeline(name, planner, c.preprocess, policy=info, distances=c.global_)

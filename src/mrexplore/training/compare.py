@@ -31,7 +31,7 @@ def compare_policies(
     """
     for p in policies:
         if not p.is_file():
-            raise MrExploreError(f"policy file not found: {p}; pass a policy.pt that mrexplore train wrote")
+            raise MrExploreError(f"policy file not found: {p}; pass a policy.npz that mrexplore train wrote")
     if fresh < 0:
         raise MrExploreError(f"--fresh must be >= 0, got {fresh}; pass a count of plans, or 0 for validation")
     cfg = TrainConfig() if robots is None else TrainConfig(val_robots=robots)

@@ -172,7 +172,7 @@ def train(
     sim: SimConfig | None = None,
     mission: MissionConfig | None = None,
 ) -> TrainResult:
-    """Train the learned global layer into ``out`` (``policy.pt``, ``best.pt``, ``state.pt``, ``log.csv``,
+    """Train the learned global layer into ``out`` (``policy.npz``, ``best.npz``, ``state.pt``, ``log.csv``,
     ``stages.csv``, ``curve.png``). ``minutes`` and ``episodes`` bound the run (the later stages are skipped).
     ``sim`` and ``mission`` set the episodes' sensor, motion, replanning and faults (None: defaults)."""
     env = {"sim": config_to_dict(sim or SimConfig()), "mission": config_to_dict(mission or MissionConfig())}
@@ -258,7 +258,7 @@ def train(
                 st.best_val, st.best_stage = row[chosen_by], stage.name
                 meta = {k: row[k] for k in row if k.startswith("val_")}
                 save_policy(
-                    out / "best.pt",
+                    out / "best.npz",
                     policy_net(net),
                     {"stage": stage.name, **meta, "chosen_by": chosen_by, "train_config": config_to_dict(cfg)},
                 )
@@ -280,13 +280,13 @@ def train(
             _checkpoint(state_path, cfg, env, net, opt, st, data, rng)
             bar.update()
     bar.close()
-    shutil.copyfile(out / "best.pt", out / "policy.pt")
+    shutil.copyfile(out / "best.npz", out / "policy.npz")
     plot_learning_curve(out / "log.csv", out / "curve.png")
     with open(out / "stages.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(st.stage_rows[0]))
         w.writeheader()
         w.writerows(st.stage_rows)
-    return TrainResult(out / "policy.pt", st.best_stage, st.stage_rows)
+    return TrainResult(out / "policy.npz", st.best_stage, st.stage_rows)
 
 
 def _checkpoint(

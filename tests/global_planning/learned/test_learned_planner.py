@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from policy_edit import edited_policy
+from random_problems import random_problem as _random_problem
 
 from mrexplore.config import LearnedConfig, MapConfig, SimConfig
 from mrexplore.global_planning.classical import UtilityPlanner, utility_cost
@@ -15,11 +17,9 @@ from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS, default_p
 from mrexplore.global_planning.learned.features import graph_inputs
 from mrexplore.global_planning.learned.network import MultiGraphNet, collate
 from mrexplore.global_planning.learned.policy import LearnedPlanner
-from mrexplore.global_planning.protocol import AssignmentProblem
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec, run_mission
 from mrexplore.pipeline import make_strategy
-from mrexplore.preprocessing.clustering import Clusters
 from mrexplore.types import MrExploreError
 
 TIMING = {"wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb", "onboard_ms_median", "onboard_ms_p95"}
@@ -28,23 +28,6 @@ TIMING = {"wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb", "onboard_ms_median
 def _untrained() -> MultiGraphNet:
     torch.manual_seed(0)
     return MultiGraphNet(LearnedConfig(), VALUE_INPUTS).eval()
-
-
-def _random_problem(rng: np.random.Generator) -> AssignmentProblem:
-    R, C = int(rng.integers(1, 9)), int(rng.integers(1, 12))
-    centres = rng.integers(0, 50, size=(C, 2)).astype(np.int32)
-    sizes = rng.integers(2, 40, size=C).astype(np.int32)
-    dist = rng.integers(1, 60, size=(R, C)).astype(np.float64)  # whole cells: many exact ties
-    dist[rng.random((R, C)) < 0.2] = np.inf
-    clusters = Clusters(centres, sizes, np.repeat(centres, sizes, 0), np.repeat(np.arange(C, dtype=np.int32), sizes))
-    return AssignmentProblem(
-        rng.integers(0, 50, size=(R, 2)).astype(np.int32),
-        clusters,
-        dist,
-        0.1,
-        np.zeros((50, 50), np.uint8),
-        current_cluster=rng.integers(-1, C, size=R),
-    )
 
 
 def test_zero_residual_start_equals_utility_on_random_problems() -> None:
@@ -83,10 +66,10 @@ def test_a_silent_scoring_mlp_is_skipped_with_the_same_costs() -> None:
 
 
 def test_zero_residual_hier_runs_exactly_as_hier_heuristic(tmp_path: Path) -> None:
-    save_policy(tmp_path / "zero.pt", _untrained())
+    save_policy(tmp_path / "zero.npz", _untrained())
     truth = load_map("generated:5", MapConfig(resolution_m=0.1))
     a = run_mission(
-        MissionSpec(truth, make_strategy("hier", policy=str(tmp_path / "zero.pt")), SimConfig(robots=3), seed=2)
+        MissionSpec(truth, make_strategy("hier", policy=str(tmp_path / "zero.npz")), SimConfig(robots=3), seed=2)
     )
     b = run_mission(MissionSpec(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=2))
     da, db = a.measures.to_dict(), b.measures.to_dict()
@@ -95,7 +78,7 @@ def test_zero_residual_hier_runs_exactly_as_hier_heuristic(tmp_path: Path) -> No
 
 def test_shipped_policy_loads_by_default_and_explores() -> None:
     s = make_strategy("hier")
-    assert s.policy is not None and s.policy["path"].endswith("pretrained/policy.pt") and len(s.policy["sha256"]) == 64
+    assert s.policy is not None and s.policy["path"].endswith("pretrained/policy.npz") and len(s.policy["sha256"]) == 64
     assert Path(s.policy["path"]).stat().st_size < 2_000_000
     m = run_mission(
         MissionSpec(load_map("generated:3", MapConfig(resolution_m=0.1)), s, SimConfig(robots=2), seed=1)
@@ -106,20 +89,20 @@ def test_shipped_policy_loads_by_default_and_explores() -> None:
 def test_checkpoint_round_trip(tmp_path: Path) -> None:
     net = _untrained()
     torch.nn.init.normal_(net.score[-1].weight)
-    save_policy(tmp_path / "p.pt", net, {"note": "x"})
-    loaded = load_policy(tmp_path / "p.pt")
+    save_policy(tmp_path / "p.npz", net, {"note": "x"})
+    loaded = load_policy(tmp_path / "p.npz")
     for (k, a), (_, b) in zip(net.state_dict().items(), loaded.net.state_dict().items(), strict=True):
         assert torch.equal(a, b), k
     assert loaded.meta["meta"] == {"note": "x"} and loaded.net.cfg == net.cfg
 
 
 def test_bad_policy_files_give_one_line_errors(tmp_path: Path) -> None:
-    with pytest.raises(MrExploreError, match=r"^policy file .*nope.pt not found; pass a file written by"):
-        load_policy(tmp_path / "nope.pt")
-    (tmp_path / "junk.pt").write_bytes(b"not a checkpoint")
-    with pytest.raises(MrExploreError, match=r"^policy file .*junk.pt is not a mrexplore policy \(.*\); retrain it$"):
-        load_policy(tmp_path / "junk.pt")
-    torch.save({"format": "other"}, tmp_path / "other.pt")
+    with pytest.raises(MrExploreError, match=r"^policy file .*nope.npz not found; pass a file written by"):
+        load_policy(tmp_path / "nope.npz")
+    (tmp_path / "junk.npz").write_bytes(b"not a checkpoint")
+    with pytest.raises(MrExploreError, match=r"^policy file .*junk.npz is not a mrexplore policy \(.*\); retrain it$"):
+        load_policy(tmp_path / "junk.npz")
+    torch.save({"format": "other"}, tmp_path / "other.pt")  # torch's format, as older versions wrote
     with pytest.raises(MrExploreError, match=r"is not a mrexplore policy \(no format tag\)"):
         load_policy(tmp_path / "other.pt")
 
@@ -155,28 +138,32 @@ def test_ncm_policy_round_trip_and_refusals(tmp_path: Path) -> None:
 
     torch.manual_seed(0)
     net = NcmNet(NcmConfig(hidden=16, blocks=2))
-    save_policy(tmp_path / "n.pt", net, {"stage": "ppo3"})
-    loaded = load_ncm_policy(tmp_path / "n.pt")
+    save_policy(tmp_path / "n.npz", net, {"stage": "ppo3"})
+    loaded = load_ncm_policy(tmp_path / "n.npz")
     assert loaded.net.cfg == net.cfg and loaded.meta["meta"] == {"stage": "ppo3"}
     for (k, a), (_, b) in zip(net.state_dict().items(), loaded.net.state_dict().items(), strict=True):
         assert torch.equal(a, b), k
     with pytest.raises(MrExploreError, match=r"is for the hier strategy, not ncm; pass one written by"):
         load_ncm_policy(default_policy_path())
-    blob = torch.load(tmp_path / "n.pt", weights_only=True)
-    blob["ncm_config"]["hidden"] = 10**6
-    torch.save(blob, tmp_path / "huge.pt")
+
+    def huge(h: dict) -> None:
+        h["ncm_config"]["hidden"] = 10**6
+
+    def extra(h: dict) -> None:
+        h["ncm_config"]["extra"] = 1
+
+    edited_policy(tmp_path / "n.npz", tmp_path / "huge.npz", header=huge)
     with pytest.raises(MrExploreError, match=r"does not fit this network \(network sizes out of range: "):
-        load_ncm_policy(tmp_path / "huge.pt")
-    blob["ncm_config"]["hidden"], blob["ncm_config"]["extra"] = 16, 1
-    torch.save(blob, tmp_path / "extra.pt")
+        load_ncm_policy(tmp_path / "huge.npz")
+    edited_policy(tmp_path / "n.npz", tmp_path / "extra.npz", header=extra)
     with pytest.raises(MrExploreError, match=r"does not fit this network \(its network config has other fields\)"):
-        load_ncm_policy(tmp_path / "extra.pt")
+        load_ncm_policy(tmp_path / "extra.npz")
 
 
 @pytest.mark.parametrize("name", ["ncm", "ncm-sampled", "ncm-matched"])
 def test_shipped_ncm_policy_loads_by_default_and_explores(name: str) -> None:
     s = make_strategy(name)
-    assert s.policy is not None and s.policy["path"].endswith("pretrained/ncm.pt")
+    assert s.policy is not None and s.policy["path"].endswith("pretrained/ncm.npz")
     assert Path(s.policy["path"]).stat().st_size < 2_000_000
     m = run_mission(
         MissionSpec(load_map("generated:3", MapConfig(resolution_m=0.1)), s, SimConfig(robots=2), seed=1)

@@ -19,20 +19,14 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
-from numpy.typing import NDArray
 from torch import Tensor, nn
 
-from mrexplore.global_planning.learned.ncm_policy import (
-    matched_targets,
-    per_robot_argmax,
-    per_robot_entropy,
-    per_robot_log_prob,
-    per_robot_sample,
-)
+from mrexplore.global_planning.learned.ncm_inputs import NcmConfig, NcmInputs, ncm_inputs
+from mrexplore.global_planning.learned.ncm_planner import NcmPlanner, NcmStep
+from mrexplore.global_planning.learned.ncm_policy import per_robot_entropy, per_robot_log_prob
 from mrexplore.global_planning.learned.sinkhorn import log_optimal_transport
-from mrexplore.global_planning.ncm_nodes import POSITION_SCALE_M, WINDOW_M, scaled_xy, within_window
-from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
-from mrexplore.threads import thread_count
+from mrexplore.global_planning.ncm_nodes import POSITION_SCALE_M, WINDOW_M
+from mrexplore.global_planning.protocol import UNASSIGNED, AssignmentProblem
 
 __all__ = [
     "NcmConfig", "NcmBatch", "NcmNet", "NcmCritic", "NcmInputs", "NcmPlanner", "NcmStep", "ncm_batch",
@@ -41,18 +35,6 @@ __all__ = [
 
 _MASKED = -1e9
 """Attention logit of a masked key: exp() underflows to 0 beside any real key, and stays finite."""
-
-
-@dataclass(frozen=True)
-class NcmConfig:
-    """Sizes of NCM's network (its public defaults)."""
-
-    hidden: int = 32
-    heads: int = 4
-    blocks: int = 3
-    sinkhorn_iters: int = 5
-    sharpen: float = 15.0
-    """Logits of the per-robot categoricals are the Sinkhorn plan's log entries times this."""
 
 
 @dataclass
@@ -148,34 +130,6 @@ class NcmNet(nn.Module):
         return out
 
 
-@dataclass(frozen=True)
-class NcmInputs:
-    """One decision's input as plain arrays (what a PPO batch stores): robots_xy ``(m, 2)``, nodes_xy
-    ``(n, 2)``, dist ``(m, n)`` (0 where unreachable), allowed ``(m, n)`` bool, float32 but ``allowed``."""
-
-    robots_xy: NDArray[np.float32]
-    nodes_xy: NDArray[np.float32]
-    dist: NDArray[np.float32]
-    allowed: NDArray[np.bool_]
-
-
-def ncm_inputs(problem: AssignmentProblem, window_m: float = WINDOW_M, scale_m: float = POSITION_SCALE_M) -> NcmInputs:
-    """The network's input for one decision: robots and candidate nodes (the problem's cluster centres) in
-    metres over ``scale_m``, geodesic distances likewise, pairs allowed where reachable and within
-    ``window_m`` in a straight line. A robot with no reachable node in its window may take any reachable
-    node (NCM's window is its local map; on a large floor the last frontiers can lie beyond every robot's
-    window, and a robot told nothing would stand still)."""
-    res = problem.resolution_m
-    robots = scaled_xy(problem.robots_rc, res, scale_m)
-    nodes = scaled_xy(problem.clusters.centers_rc, res, scale_m)
-    d = (problem.dist_cells * res / scale_m).astype(np.float32)
-    reachable = np.isfinite(d)
-    allowed = reachable & within_window(robots, nodes, window_m, scale_m)
-    none_near = ~allowed.any(axis=1)
-    allowed[none_near] = reachable[none_near]
-    return NcmInputs(robots, nodes, np.where(reachable, d, 0.0).astype(np.float32), allowed)
-
-
 def ncm_collate(decisions: list[NcmInputs]) -> NcmBatch:
     """Decisions padded to the largest team and node count (padding changes no output)."""
     B = len(decisions)
@@ -228,73 +182,6 @@ class NcmCritic(nn.Module):
 
         count = b.node_mask.float().sum(1, keepdim=True) / 100.0
         return self.head(torch.cat([*pooled(r, b.robot_mask), *pooled(f, b.node_mask), count, extra], dim=-1))[:, 0]
-
-
-@dataclass(frozen=True)
-class NcmStep:
-    """One sampled decision, for PPO: the inputs, each robot's node (:data:`UNASSIGNED` for a robot with
-    none allowed), the joint log-probability, the critic's value and its scalars."""
-
-    inputs: NcmInputs
-    targets: NDArray[np.int64]
-    logp: float
-    value: float
-    extra: NDArray[np.float32]
-
-
-@dataclass
-class NcmPlanner:
-    """NCM behind the :class:`~mrexplore.global_planning.protocol.GlobalPlanner` protocol: each robot takes
-    the node of largest logit (``sample=False``, the deterministic variant), draws its own (NCM's
-    evaluation), with the problem's generator, or (``match``, deterministic) the robots take the joint
-    choice of largest summed logit with every node used once before any is shared. A robot with no
-    allowed node gets none. With ``record``
-    (a list) and a ``critic``, each sampled decision is appended as an :class:`NcmStep` (training);
-    ``value_extra`` holds the critic's scalars for the next decision."""
-
-    net: NcmNet
-    sample: bool = False
-    name: str = "ncm"
-    match: bool = False
-    critic: NcmCritic | None = None
-    record: list[NcmStep] | None = None
-    value_extra: NDArray[np.float32] | None = None
-
-    def __post_init__(self) -> None:
-        if torch.get_num_threads() > thread_count():  # as LearnedPlanner: one mission per core in the bench
-            torch.set_num_threads(thread_count())
-
-    def logits(self, problem: AssignmentProblem) -> Tensor:
-        """``(R, N)`` per-robot logits (``-inf`` where not allowed)."""
-        with torch.no_grad():
-            return self.net(ncm_batch(problem))[0]
-
-    def assign(self, problem: AssignmentProblem) -> Assignment:
-        inputs = ncm_inputs(problem)
-        batch = ncm_collate([inputs])
-        with torch.no_grad():
-            logits = self.net(batch)[0]
-        ok = torch.isfinite(logits).any(dim=1)
-        out = np.full(problem.n_robots, UNASSIGNED, dtype=np.int64)
-        if not ok.any():
-            return Assignment(out)
-        if self.sample:
-            seed = int(problem.rng.integers(2**62)) if problem.rng is not None else 0
-            picks = per_robot_sample(logits[ok], torch.Generator().manual_seed(seed))
-        elif self.match:
-            picks = matched_targets(logits[ok])
-        else:
-            picks = per_robot_argmax(logits[ok])
-        out[ok.numpy()] = picks.numpy()
-        if self.record is not None:
-            if self.critic is None or self.value_extra is None:
-                raise ValueError("recording NCM decisions needs a critic and value_extra")
-            extra = np.asarray(self.value_extra, np.float32)
-            with torch.no_grad():
-                value = float(self.critic(batch, torch.from_numpy(extra)[None])[0])
-            logp = float(per_robot_log_prob(logits[ok], picks))
-            self.record.append(NcmStep(inputs, out.copy(), logp, value, extra))
-        return Assignment(out)
 
 
 def ncm_log_prob(net: NcmNet, steps: list[NcmStep]) -> tuple[Tensor, Tensor]:

@@ -1,21 +1,28 @@
 """The learned global planner: mGNN affinities decoded by the Hungarian algorithm (evaluation) or sampled by
-robots choosing one after another without replacement (training), with an exact log-probability."""
+robots choosing one after another without replacement (training), with an exact log-probability.
+
+Deciding runs on the NumPy network (no torch); torch is imported only by the training functions here and
+where the planner is given the torch network."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import torch
 from numpy.typing import NDArray
-from torch import Tensor
 
 from mrexplore.config import GlobalPlanningConfig
 from mrexplore.global_planning.classical import utility_cost
 from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs
-from mrexplore.global_planning.learned.network import MultiGraphNet, collate
+from mrexplore.global_planning.learned.numpy_nets import GraphNetNp
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
+
+if TYPE_CHECKING:
+    from torch import Tensor
+
+    from mrexplore.global_planning.learned.network import MultiGraphNet
 
 __all__ = [
     "LearnedPlanner",
@@ -86,6 +93,8 @@ def sequential_log_prob(affinity: Tensor, order: Tensor, choices: Tensor) -> tup
     padding); ``choices (B, R)`` cluster per robot (-1 for none). The entropy is that of each robot's
     choice given those before it, summed (the joint entropy given the order, in expectation).
     """
+    import torch
+
     B, R, C = affinity.shape
     taken = torch.zeros(B, C, dtype=torch.bool)
     logp = affinity.new_zeros(B)
@@ -112,6 +121,8 @@ def sequential_log_prob(affinity: Tensor, order: Tensor, choices: Tensor) -> tup
 def assignment_score(affinity: Tensor, candidates: Tensor) -> Tensor:
     """Summed affinity (paper eq. 2) of candidate assignments: ``affinity (B, R, C)``, ``candidates
     (B, M, R)`` cluster per robot (-1: none, or padding) -> ``(B, M)``. Forbidden pairs count 0."""
+    import torch
+
     B, M, R = candidates.shape
     safe = torch.where(torch.isfinite(affinity), affinity, torch.zeros_like(affinity))
     idx = candidates.clamp(min=0)
@@ -138,9 +149,10 @@ class LearnedPlanner:
 
     Deterministic by default (Hungarian on E_rc). With ``sample=True`` it draws from the sequential
     policy with ``rng`` (or the problem's generator) and appends a :class:`PolicyStep` to ``record``.
+    ``net`` is the NumPy network (what the strategies run) or the torch one (training; ``record`` needs it).
     """
 
-    net: MultiGraphNet
+    net: GraphNetNp | MultiGraphNet
     heuristic: GlobalPlanningConfig = field(default_factory=GlobalPlanningConfig)
     name: str = "learned"
     sample: bool = False
@@ -150,6 +162,12 @@ class LearnedPlanner:
     """Privileged scalars for the critic at the next decision (set by the trainer; the actor never reads them)."""
 
     def __post_init__(self) -> None:
+        if isinstance(self.net, GraphNetNp):
+            if self.record is not None:
+                raise ValueError("recording decisions for PPO needs the torch network")
+            return
+        import torch
+
         # torch runs on one intra-op thread in a process that holds a learned planner. The network's tensors
         # are too small to gain from threads, and its OpenMP workers spin after every call, taking the cores
         # from the distance-field threads of the same decision and from other processes (with two threads,
@@ -168,6 +186,13 @@ class LearnedPlanner:
     def _cost(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64], float]:
         """The affinity in cost form, ``cost - base_scale * residual`` (``inf`` where unreachable)."""
         g = graph_inputs(problem, self.net.cfg, self.heuristic)
+        if isinstance(self.net, GraphNetNp):
+            residual = self.net.residual(g).astype(np.float64)
+            return g, utility_cost(problem, self.heuristic) - self.net.cfg.base_scale * residual, 0.0
+        import torch
+
+        from mrexplore.global_planning.learned.network import collate
+
         with torch.no_grad():
             batch = collate([g])
             value = 0.0
@@ -199,6 +224,7 @@ class LearnedPlanner:
         rng = self.rng or problem.rng or np.random.default_rng()
         order, choices, logp = sample_sequential(aff, rng)
         if self.record is not None:
+            assert not isinstance(self.net, GraphNetNp)  # refused at construction
             extra = self.value_extra if self.value_extra is not None else np.zeros(self.net.value_inputs, np.float32)
             self.record.append(PolicyStep(g, order, choices, logp, value, extra))
         return Assignment(choices)
