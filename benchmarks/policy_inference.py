@@ -1,9 +1,10 @@
-"""Learned global layer speed: policy inference per decision, and a whole decision of learned hier against
-utility and hier-heuristic on the largest HouseExpo map.
+"""Learned global layer speed: policy inference per decision (NumPy, as the strategies decide, beside torch,
+as they train), and a whole decision of learned hier against utility and hier-heuristic on the largest
+HouseExpo map.
 
 Run: python benchmarks/policy_inference.py [--robots 8] [--clusters 60] [--steps 300]
-Targets on the 2-core dev machine: inference <= 5 ms per decision at 8 robots and 60 clusters; a decision
-of learned hier at 8 robots no slower than 1.2x utility's.
+Targets on the 2-core dev machine: inference <= 5 ms per decision at 8 robots and 60 clusters, NumPy no
+slower than torch; a decision of learned hier at 8 robots no slower than 1.2x utility's.
 """
 
 from __future__ import annotations
@@ -16,8 +17,9 @@ import numpy as np
 from _common import houseexpo_dir, largest_houseexpo, run_script
 
 from mrexplore.config import MissionConfig, SimConfig
-from mrexplore.global_planning.learned.checkpoint import load_policy
+from mrexplore.global_planning.learned.ncm_planner import NcmPlanner
 from mrexplore.global_planning.learned.policy import LearnedPlanner
+from mrexplore.global_planning.learned.policy_file import load_ncm_policy_np, load_policy_np
 from mrexplore.global_planning.protocol import AssignmentProblem
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec
@@ -25,10 +27,21 @@ from mrexplore.pipeline import make_strategy
 from mrexplore.preprocessing.clustering import Clusters
 
 
-def inference_ms(robots: int, clusters: int, repeats: int = 200) -> tuple[float, float]:
-    """Median and p95 ms of the learned planner's assign() (features, network, Hungarian) on random problems."""
+def planner_of(strategy: str, backend: str) -> LearnedPlanner | NcmPlanner:
+    """The shipped policy of ``strategy`` (hier, or ncm) on the NumPy network or the torch one."""
+    if backend == "torch":
+        from mrexplore.global_planning.learned.checkpoint import load_ncm_policy, load_policy
+
+        return LearnedPlanner(load_policy().net) if strategy == "hier" else NcmPlanner(load_ncm_policy().net)
+    return LearnedPlanner(load_policy_np().net) if strategy == "hier" else NcmPlanner(load_ncm_policy_np().net)
+
+
+def inference_ms(
+    robots: int, clusters: int, strategy: str = "hier", backend: str = "numpy", repeats: int = 200
+) -> tuple[float, float]:
+    """Median and p95 ms of a learned planner's assign() (inputs, network, decoding) on random problems."""
     rng = np.random.default_rng(0)
-    planner = LearnedPlanner(load_policy().net)
+    planner = planner_of(strategy, backend)
     times = []
     for _ in range(repeats):
         centres = rng.integers(0, 400, size=(clusters, 2)).astype(np.int32)
@@ -68,9 +81,14 @@ def main() -> int:
     ap.add_argument("--clusters", type=int, default=60)
     ap.add_argument("--steps", type=int, default=300)
     args = ap.parse_args()
-    inference_ms(2, 5, 20)  # warm up torch
-    med, p95 = inference_ms(args.robots, args.clusters)
-    print(f"policy inference, {args.robots} robots x {args.clusters} clusters: {med:.2f} ms median, {p95:.2f} ms p95")
+    print(f"policy inference, {args.robots} robots x {args.clusters} clusters (median, p95 ms):")
+    for strategy in ("hier", "ncm"):
+        got = {}
+        for backend in ("numpy", "torch"):
+            inference_ms(2, 5, strategy, backend, 20)  # warm up
+            got[backend] = inference_ms(args.robots, args.clusters, strategy, backend)
+        (nm, np95), (tm, tp95) = got["numpy"], got["torch"]
+        print(f"  {strategy:5s} numpy {nm:6.2f} {np95:6.2f}   torch {tm:6.2f} {tp95:6.2f}   numpy/torch {nm / tm:.2f}")
     if not houseexpo_dir().is_dir():
         print(f"skipped the decision timings: HouseExpo maps not found at {houseexpo_dir()}", file=sys.stderr)
         return 0

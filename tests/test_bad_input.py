@@ -169,7 +169,7 @@ def test_outputs_are_checked_before_the_mission(monkeypatch, capsys) -> None:
     def no_mission(*args, **kwargs):
         raise AssertionError("the mission ran before the output path was checked")
 
-    monkeypatch.setattr("mrexplore.cli.run_mission", no_mission)
+    monkeypatch.setattr("mrexplore.mission.run_mission", no_mission)
     for flag in ("--gif", "--png", "--save-map"):
         assert main(["explore", "--map", "generated:3", *FAST, flag, "/nonexistent/out"]) == 2
         assert _err(capsys) == f"{flag} folder /nonexistent does not exist; create it first"

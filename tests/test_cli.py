@@ -234,3 +234,27 @@ def test_ncm_explores_and_benches_with_a_given_policy(tmp_path, capsys) -> None:
         f"mrexplore: error: policy file {default_policy_path()} is for the hier strategy, not ncm; "
         "pass one written by 'mrexplore train --strategy ncm' (--policy ncm=FILE where a run has both)\n"
     )
+
+
+def test_the_built_in_names_are_the_registry_s() -> None:
+    from mrexplore.pipeline import strategy_names
+    from mrexplore.strategy_names import BUILTIN_STRATEGIES
+
+    assert tuple(strategy_names()) == BUILTIN_STRATEGIES
+
+
+LIGHT = """
+import sys
+from mrexplore.cli import main
+codes = [main(a) for a in (["--help"], ["explore", "--strategy", "heir"], ["explore", "--robots", "0"],
+                           ["bench", "--maps", "x", "--strategies", "hier,nope", "--out", "o"])]
+print(codes, sorted(m for m in ("numba", "scipy", "torch", "sklearn", "mrexplore.mission") if m in sys.modules))
+"""
+
+
+def test_help_and_argument_errors_import_none_of_the_heavy_modules() -> None:
+    """--help and argument errors answer before numba, SciPy, torch or the simulator are imported (what
+    makes them answer at once; the time itself is a benchmark's, not a test's)."""
+    out = subprocess.run([sys.executable, "-c", LIGHT], capture_output=True, text=True, timeout=60, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "[0, 2, 2, 2] []"
+    assert "unknown strategy 'heir'" in out.stderr and "unknown strategy 'nope'" in out.stderr

@@ -1,4 +1,8 @@
-"""Command line: parses arguments into configs and calls the library; bad input is one line and exit 2."""
+"""Command line: parses arguments into configs and calls the library; bad input is one line and exit 2.
+
+The modules that do the work (numba's kernels, the simulator, the bench) are imported only once the
+arguments are valid, so that ``--help`` and every argument error answer at once.
+"""
 
 from __future__ import annotations
 
@@ -10,14 +14,8 @@ import sys
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
-import numpy as np
-from numpy.typing import NDArray
-
-from mrexplore.bench.compare import TABLE_I, compare_runs, table_time, team_ratio
-from mrexplore.bench.report import write_report
-from mrexplore.bench.runner import EpisodeSpec, expand_maps, run_bench
 from mrexplore.config import (
     TRAINABLE,
     FaultConfig,
@@ -30,14 +28,13 @@ from mrexplore.config import (
     config_yaml,
     read_config_file,
 )
-from mrexplore.example_maps import MAPS_ENV, maps_dir
-from mrexplore.maps.loaders import DEFAULT_MAP, load_map
-from mrexplore.maps.map_saver import save_ros_map
-from mrexplore.mission import MissionSpec, run_mission
-from mrexplore.pipeline import make_strategy, strategy_names
-from mrexplore.render import GifRecorder, save_png
-from mrexplore.sim.starts import draw_starts, starts_from_xy
+from mrexplore.example_maps import DEFAULT_MAP, MAPS_ENV, maps_dir
+from mrexplore.strategy_names import BUILTIN_STRATEGIES, TABLE_I, check_strategy_name
 from mrexplore.types import MrExploreError
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
 
 __all__ = ["main", "build_parser", "strict_json"]
 
@@ -171,7 +168,7 @@ def _add_mission_flags(ex: argparse.ArgumentParser) -> None:
     ex.add_argument(
         "--strategy",
         default=DEFAULT_STRATEGY,
-        help=f"one of {', '.join(strategy_names())} (default {DEFAULT_STRATEGY})",
+        help=f"one of {', '.join(BUILTIN_STRATEGIES)} (default {DEFAULT_STRATEGY})",
     )
     ex.add_argument(
         "--no-local", action="store_true", help="turn the local routing layer off: robots go to cluster centres"
@@ -362,7 +359,7 @@ def _add_ros2(sub: Any) -> None:
     ce.add_argument(
         "--strategy",
         default=DEFAULT_STRATEGY,
-        help=f"one of {', '.join(strategy_names())} but oracle (default {DEFAULT_STRATEGY})",
+        help=f"one of {', '.join(BUILTIN_STRATEGIES)} but oracle (default {DEFAULT_STRATEGY})",
     )
     ce.add_argument("--policy", default=None, help=POLICY_HELP)
     ce.add_argument(
@@ -470,6 +467,7 @@ def _ros2(args: argparse.Namespace, argv: list[str]) -> str:
 
 def _ros2_sim(args: argparse.Namespace, argv: list[str]) -> str:
     """``ros2 sim`` and ``ros2 launch``: the mission's settings as explore reads them."""
+    from mrexplore.mission import MissionSpec
     from mrexplore.ros2.deployment import Deployment, TeamGrid
 
     run, strategy, truth, starts = _mission_setup(args)
@@ -564,13 +562,19 @@ def _report(args: argparse.Namespace, argv: Sequence[str]) -> str:
     if args.report == "paired":
         runs = _labelled(args.runs, "--runs")
         trains = {k: Path(v) for k, v in _labelled(args.train, "--train").items()}
+        from mrexplore.bench.compare import compare_runs
+
         text = compare_runs(runs, args.strategy, trains, args.common, "mrexplore " + " ".join(argv))
         if args.out:
             Path(args.out).write_text(text)
         return text
     if args.report == "teams":
+        from mrexplore.bench.compare import team_ratio
+
         return team_ratio(_folders(args.runs), args.small, args.large, args.strategy)
     if args.report == "table-time":
+        from mrexplore.bench.compare import table_time
+
         return table_time(_folders(args.runs), args.seeds, args.workers, [s for s in args.strategies.split(",") if s])
     import csv
 
@@ -660,6 +664,8 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
     strategies = [s for s in args.strategies.split(",") if s]
     if not strategies:
         raise MrExploreError(f"--strategies must name at least one strategy, got {args.strategies!r}")
+    for name in strategies:
+        check_strategy_name(name)
     run = _run_config(args)
     robots = _ints(args.robots, "--robots") if args.robots is not None else [run.sim.robots]
     if len(set(robots)) != len(robots):
@@ -668,6 +674,9 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
         SimConfig(robots=n)
         _check_failures(run, n)
     _check_output(args.out, "--out", folder=True)
+    from mrexplore.bench.report import write_report
+    from mrexplore.bench.runner import EpisodeSpec, expand_maps, run_bench
+
     maps = expand_maps(args.maps)
     specs = [
         EpisodeSpec(m, s, n, seed, run, args.policy)
@@ -734,6 +743,8 @@ def _train(args: argparse.Namespace) -> str:
 
 def _strategy(args: argparse.Namespace, run: RunConfig) -> Any:
     """The strategy the flags name (``--strategy``, ``--no-local``, ``--policy``) with the run's settings."""
+    from mrexplore.pipeline import make_strategy
+
     return make_strategy(
         args.strategy,
         run.global_planning,
@@ -748,8 +759,14 @@ def _strategy(args: argparse.Namespace, run: RunConfig) -> Any:
 def _mission_setup(args: argparse.Namespace) -> tuple[RunConfig, Any, Any, NDArray[np.int32] | None]:
     """The run's settings, strategy, map and starts from explore's flags (shared by ``ros2 sim`` and
     ``ros2 launch``), each checked before any work."""
+    check_strategy_name(args.strategy)
     run = _run_config(args)
     sim_cfg = run.sim
+    import numpy as np
+
+    from mrexplore.maps.loaders import load_map
+    from mrexplore.sim.starts import draw_starts, starts_from_xy
+
     strategy = _strategy(args, run)
     _check_failures(run, sim_cfg.robots)
     truth = load_map(args.map, run.map)
@@ -775,6 +792,10 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
     _check_output(args.png, "--png")
     _check_output(args.save_map, "--save-map")
     run, strategy, truth, starts = _mission_setup(args)
+    from mrexplore.maps.map_saver import save_ros_map
+    from mrexplore.mission import MissionSpec, run_mission
+    from mrexplore.render import GifRecorder, save_png
+
     sim_cfg, mission_cfg = run.sim, run.mission
     recorder = GifRecorder() if (args.gif or args.png) else None
     result = run_mission(
@@ -825,7 +846,7 @@ def strict_json(value: Any) -> Any:
         return {str(k): strict_json(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
         return [strict_json(v) for v in value]
-    if isinstance(value, np.generic):
+    if hasattr(value, "item") and hasattr(value, "dtype") and getattr(value, "ndim", None) == 0:  # NumPy scalar
         return strict_json(value.item())
     return value
 

@@ -6,7 +6,10 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-__all__ = ["MAPS_ENV", "DEFAULT_MAPS_DIR", "maps_dir"]
+__all__ = ["MAPS_ENV", "DEFAULT_MAPS_DIR", "DEFAULT_MAP", "maps_dir"]
+
+DEFAULT_MAP = "generated:0"
+"""The map a mission explores when none is given: a procedural floor plan."""
 
 MAPS_ENV = "MREXPLORE_MAPS"
 """The environment variable naming the example maps' folder."""

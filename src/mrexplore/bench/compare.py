@@ -12,12 +12,11 @@ from pathlib import Path
 
 from mrexplore.bench.report import paired_bootstrap, paired_table, steps_of, steps_table
 from mrexplore.bench.runner import read_rows
+from mrexplore.strategy_names import TABLE_I
 from mrexplore.types import MrExploreError
 
 __all__ = ["compare_runs", "team_ratio", "table_time", "TABLE_I"]
 
-TABLE_I = ("hier", "hier-heuristic", "utility", "coscan", "nearest", "ncm", "oracle")
-"""The strategies of the dev set's Table I."""
 
 _NOT_RESULTS = frozenset(
     {"plan_ms_mean", "plan_ms_p95", "wall_s", "peak_mb", "onboard_ms_median", "onboard_ms_p95"}  # timings

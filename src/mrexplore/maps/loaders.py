@@ -18,6 +18,7 @@ import numpy as np
 from PIL import Image, ImageDraw, UnidentifiedImageError
 
 from mrexplore.config import MapConfig
+from mrexplore.example_maps import DEFAULT_MAP
 from mrexplore.maps.floorplan import FloorplanSpec, generate_floorplan
 from mrexplore.maps.frame import GridFrame
 from mrexplore.maps.ground_truth import GroundTruthMap, close_narrow_gaps, mark_outside_as_obstacle
@@ -35,7 +36,6 @@ __all__ = [
     "HOUSEEXPO_RASTER_M",
 ]
 
-DEFAULT_MAP = "generated:0"
 """The built-in map: a procedural floor plan (license-clean, made here from a seed)."""
 GRAYSCALE_PIXEL_M = 0.01
 """Default metres per pixel of a grayscale image with no YAML (HouseExpo renders)."""
