@@ -131,7 +131,8 @@ def test_malformed_and_empty_maps(tmp_path, capsys) -> None:
     Image.fromarray(np.zeros((10, 10), np.uint8)).save(tmp_path / "black.png")
     assert main(["explore", "--map", str(tmp_path / "black.png")]) == 2
     assert capsys.readouterr().err == (
-        "mrexplore: error: map black has no free space inside its border; check the file's free/occupied values\n"
+        "mrexplore: error: map black has no free space enclosed by walls (no wall outline found); check the "
+        "file's free/occupied values\n"
     )
 
 
@@ -258,3 +259,17 @@ def test_help_and_argument_errors_import_none_of_the_heavy_modules() -> None:
     out = subprocess.run([sys.executable, "-c", LIGHT], capture_output=True, text=True, timeout=60, check=True)
     assert out.stdout.strip().splitlines()[-1] == "[0, 2, 2, 2] []"
     assert "unknown strategy 'heir'" in out.stderr and "unknown strategy 'nope'" in out.stderr
+
+
+def test_a_first_run_says_it_compiles(monkeypatch, tmp_path, capsys) -> None:
+    """Where numba's cache holds no kernels yet, the run says so on stderr before compiling; once cached,
+    nothing."""
+    from mrexplore import kernel_cache
+
+    assert kernel_cache.kernels_cached()  # this checkout ran missions before
+    monkeypatch.setattr(kernel_cache, "_SENTINEL", "no-such-kernel.*.nbi")
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert kernel_cache.say_if_compiling()
+    assert capsys.readouterr().err == "mrexplore: compiling kernels, first run only (about a minute)\n"
+    monkeypatch.undo()
+    assert not kernel_cache.say_if_compiling() and capsys.readouterr().err == ""

@@ -157,3 +157,55 @@ def test_the_watchdog_drops_a_goal_that_brings_nothing() -> None:
         mission._needs_decision()  # noqa: SLF001 - the watchdog runs where replanning is checked
     assert mission.stalls == 1 and mission.goals[0].tolist() == [-1, -1]
     assert mission.blacklist[1, 10]
+
+
+class _Clock:
+    def __init__(self) -> None:
+        self.t = 0.0
+
+    def __call__(self) -> float:
+        return self.t
+
+
+def test_progress_lines_every_few_seconds_where_no_terminal() -> None:
+    """Piped output gets a line every LINE_EVERY_S seconds of work and one at the end; off prints nothing."""
+    import io
+
+    from mrexplore.progress import LINE_EVERY_S, Progress
+
+    out, clock = io.StringIO(), _Clock()
+    p = Progress(10, "bench", "episodes", None, stream=out, clock=clock)
+    assert p.mode == "lines"
+    p.update()  # at once: no line yet
+    clock.t = LINE_EVERY_S
+    p.update()  # 2 done after 5 s: 8 more take 20 s
+    clock.t = LINE_EVERY_S + 1
+    p.update()  # within the interval: no line
+    clock.t = 8.0
+    p.set(10)  # within the interval: said at close, once
+    p.detail = "all done"
+    p.close()
+    p.close()
+    assert out.getvalue().splitlines() == [
+        "bench: 2/10 episodes (20%), 5 s, about 20 s left",
+        "bench: 10/10 episodes (100%), 8 s, all done",
+    ]
+    quiet = io.StringIO()
+    q = Progress(10, "bench", "episodes", False, stream=quiet, clock=clock)
+    clock.t = 100.0
+    q.set(10)
+    q.close()
+    assert quiet.getvalue() == ""
+
+
+def test_a_mission_s_progress_line_says_coverage_and_step() -> None:
+    import io
+
+    from mrexplore.progress import Progress
+
+    out, clock = io.StringIO(), _Clock()
+    p = Progress(100, "hier generated:0", "%", None, stream=out, clock=clock)
+    clock.t = 6.0
+    p.detail = "step 40"
+    p.set(45)
+    assert out.getvalue() == "hier generated:0: 45%, 6 s, about 7 s left, step 40\n"

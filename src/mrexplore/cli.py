@@ -11,6 +11,7 @@ import json
 import math
 import os
 import sys
+import warnings
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -29,6 +30,7 @@ from mrexplore.config import (
     read_config_file,
 )
 from mrexplore.example_maps import DEFAULT_MAP, MAPS_ENV, maps_dir
+from mrexplore.kernel_cache import say_if_compiling
 from mrexplore.strategy_names import BUILTIN_STRATEGIES, TABLE_I, check_strategy_name
 from mrexplore.types import MrExploreError
 
@@ -674,6 +676,7 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
         SimConfig(robots=n)
         _check_failures(run, n)
     _check_output(args.out, "--out", folder=True)
+    say_if_compiling()
     from mrexplore.bench.report import write_report
     from mrexplore.bench.runner import EpisodeSpec, expand_maps, run_bench
 
@@ -716,6 +719,7 @@ def _train(args: argparse.Namespace) -> str:
         raise MrExploreError(f"--episodes must be >= 1, got {args.episodes}")
     _check_output(args.out, "--out", folder=True)
     _need_torch()
+    say_if_compiling()
     from mrexplore.training.trainer import train
 
     result = train(
@@ -762,6 +766,7 @@ def _mission_setup(args: argparse.Namespace) -> tuple[RunConfig, Any, Any, NDArr
     check_strategy_name(args.strategy)
     run = _run_config(args)
     sim_cfg = run.sim
+    say_if_compiling()
     import numpy as np
 
     from mrexplore.maps.loaders import load_map
@@ -904,8 +909,18 @@ def _summary(rec: dict[str, Any]) -> str:
     )
 
 
+def _one_line_warning(message: Warning | str, *args: Any, **kwargs: Any) -> None:
+    print(f"mrexplore: warning: {message}", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``mrexplore`` command; returns the exit code."""
+    with warnings.catch_warnings():
+        warnings.showwarning = _one_line_warning  # a map that may not be a plan: one line, as errors are
+        return _main(argv)
+
+
+def _main(argv: Sequence[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         args = build_parser().parse_args(argv)

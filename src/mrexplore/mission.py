@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import copy
 import math
-import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -30,7 +29,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from tqdm import tqdm
 
 from mrexplore.config import FaultConfig, MissionConfig, SimConfig
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
@@ -42,6 +40,7 @@ from mrexplore.pipeline import NO_GOAL, NO_ROUTE, Decision, DecisionInput, Explo
 from mrexplore.preprocessing.frontiers import close_unknown_holes, detect_frontiers
 from mrexplore.preprocessing.link import TeamLink
 from mrexplore.preprocessing.transmission import LinkStatus
+from mrexplore.progress import Progress
 from mrexplore.sim.belief import classify
 from mrexplore.sim.measures import EpisodeMeasures, lower_bound_steps
 from mrexplore.sim.starts import draw_starts
@@ -281,8 +280,7 @@ class Mission:
         """Goals the centre assigned with no path to them, blacklisted (:meth:`_apply`)."""
         self.state = np.full(truth.shape, CellState.UNKNOWN, dtype=np.uint8)  # until the first round
         self.done_reason: str | None = None
-        show = sys.stderr.isatty() if progress is None else progress
-        self._bar = tqdm(total=100, unit="%", desc=f"{strategy.name} {truth.name}", disable=not show, leave=False)
+        self._bar = Progress(100, f"{strategy.name} {truth.name}", "%", progress, leave=False)
         self.blocked = np.zeros(n, dtype=bool)
         self.routes = [NO_ROUTE] * n  # targets after the current goal
         self.passable = self.state == CellState.FREE
@@ -480,7 +478,8 @@ class Mission:
         r = self.sim_cfg.reward
         new_m2 = result.new_known_cells * self.truth.resolution_m**2
         self.reward_since_decision += r.time_reward + r.area_weight * new_m2
-        self._bar.update(round(100 * self.sim.coverage) - self._bar.n)
+        self._bar.detail = f"step {self.sim.steps}"
+        self._bar.set(round(100 * self.sim.coverage))
         if self.observer:
             self.observer(self.sim, self.decision, self.goals, self.link.status)
         return result

@@ -148,7 +148,7 @@ def test_missing_file_and_no_free_space(tmp_path) -> None:
     with pytest.raises(MrExploreError, match=r"^map file not found: .*nope.png; pass an existing map file"):
         load_map(tmp_path / "nope.png")
     Image.fromarray(np.zeros((8, 8), np.uint8)).save(tmp_path / "black.png")
-    with pytest.raises(MrExploreError, match="has no free space inside its border"):
+    with pytest.raises(MrExploreError, match=r"has no free space enclosed by walls \(no wall outline found\)"):
         load_map(tmp_path / "black.png")
 
 

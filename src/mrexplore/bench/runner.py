@@ -16,7 +16,6 @@ import functools
 import hashlib
 import json
 import os
-import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -25,13 +24,13 @@ from typing import Any
 import numpy as np
 import yaml
 from PIL import Image
-from tqdm import tqdm
 
 from mrexplore.config import RunConfig, TrainConfig, config_to_dict
 from mrexplore.csv_append import append_row, drop_partial_tail
 from mrexplore.maps.loaders import is_generator_spec, load_map_shared
 from mrexplore.mission import MissionSpec, run_mission
 from mrexplore.pipeline import make_strategy, policy_for, strategy_spec
+from mrexplore.progress import Progress
 from mrexplore.safe_yaml import load_yaml_file
 from mrexplore.threads import THREADS_ENV
 from mrexplore.types import MrExploreError
@@ -301,9 +300,8 @@ def run_bench(
     todo = list({s.key: s for s in specs if s.key not in done}.values())  # a spec given twice runs once
     # Largest maps first, so that no long episode starts last and leaves the other workers idle.
     todo.sort(key=lambda s: -_area_hint(s.map_path))
-    show = sys.stderr.isatty() if progress is None else progress
     total = len({s.key for s in specs})
-    bar = tqdm(total=total, initial=total - len(todo), unit="ep", disable=not show)
+    bar = Progress(total, "bench", "episodes", progress, initial=total - len(todo))
     workers = workers or os.cpu_count() or 1
     # Episodes already fill the cores: each local worker's kernels run on as many threads as are left over;
     # a Ray task has one CPU, so its kernels run on one thread.

@@ -22,6 +22,7 @@ from mrexplore.example_maps import DEFAULT_MAP
 from mrexplore.maps.floorplan import FloorplanSpec, generate_floorplan
 from mrexplore.maps.frame import GridFrame
 from mrexplore.maps.ground_truth import GroundTruthMap, close_narrow_gaps, mark_outside_as_obstacle
+from mrexplore.maps.plan_check import check_plan, check_tones
 from mrexplore.maps.resample import resample_obstacles
 from mrexplore.safe_yaml import load_yaml_file
 from mrexplore.types import MrExploreError
@@ -146,7 +147,11 @@ def _finish(
     occupied = close_narrow_gaps(obstacle, radius)
     occupied = mark_outside_as_obstacle(occupied, cfg.outside_opening_m / frame.resolution_m)
     if not (~occupied).any():
-        raise MrExploreError(f"map {name} has no free space inside its border; check the file's free/occupied values")
+        raise MrExploreError(
+            f"map {name} has no free space enclosed by walls (no wall outline found); check the file's "
+            "free/occupied values"
+        )
+    check_plan(occupied, frame.resolution_m, name)
     if start_rc is not None and occupied[start_rc]:
         start_rc = None
     return GroundTruthMap(occupied=occupied, frame=frame, name=name, start_hint_rc=start_rc)
@@ -262,7 +267,9 @@ def _load_image(path: Path, cfg: MapConfig) -> GroundTruthMap:
             start_rc = (int(rr.mean() * scale), int(cc.mean() * scale))
     else:
         pixel = cfg.pixel_size_m or GRAYSCALE_PIXEL_M
-        obstacle = np.asarray(img.convert("L")) < _GRAY_FREE_MIN
+        gray = np.asarray(img.convert("L"))
+        check_tones(gray, path.stem)
+        obstacle = gray < _GRAY_FREE_MIN
     _check_cells(str(path), obstacle.shape, pixel, cfg)
     obstacle = resample_obstacles(obstacle, pixel, cfg.resolution_m)
     frame = GridFrame(obstacle.shape[0], obstacle.shape[1], cfg.resolution_m)

@@ -13,7 +13,6 @@ from __future__ import annotations
 import csv
 import math
 import shutil
-import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -22,12 +21,12 @@ from typing import Any
 
 import numpy as np
 import torch
-from tqdm import tqdm
 
 from mrexplore.config import MissionConfig, SimConfig, TrainConfig, config_to_dict
 from mrexplore.csv_append import append_row, drop_partial_tail, keep_rows
 from mrexplore.global_planning.learned.checkpoint import code_version, save_policy
 from mrexplore.global_planning.learned.features import GraphInputs
+from mrexplore.progress import Progress
 from mrexplore.threads import THREADS_ENV
 from mrexplore.training.curve import plot_learning_curve
 from mrexplore.training.episodes import (
@@ -82,10 +81,17 @@ class _Runner(JobRunner[EpisodeJob, dict[str, Any]]):
 
     def __init__(self, workers: int, ray_address: str | None) -> None:
         super().__init__(run_job, workers, ray_address, init_worker, (), {THREADS_ENV: "1", "OMP_NUM_THREADS": "1"})
+        self.on_result: Callable[[], None] | None = None
+        """Called as each episode ends (the progress lines between stages)."""
 
     def results(self, jobs: Sequence[EpisodeJob], deadline: float) -> list[dict[str, Any]]:
         """Results of the ``jobs`` that ran, in the jobs' order (jobs not started by ``deadline`` are dropped)."""
-        return sorted(self.run(jobs, deadline), key=lambda r: int(r["index"]))
+        out = []
+        for r in self.run(jobs, deadline):
+            out.append(r)
+            if self.on_result is not None:
+                self.on_result()
+        return sorted(out, key=lambda r: int(r["index"]))
 
 
 @dataclass(frozen=True)
@@ -205,9 +211,16 @@ def train(
     log = _Log(out, st.log_rows if resume and st.log_rows >= 0 else None)
     t_start = time.perf_counter() - st.elapsed_s
     deadline = t_start + minutes * 60 if minutes is not None else math.inf
-    show = sys.stderr.isatty() if progress is None else progress
-    bar = tqdm(total=len(stages), initial=st.stage, unit="stage", disable=not show, desc="train")
+    bar = Progress(len(stages), "train", "stages", progress, initial=st.stage)
     with _Runner(workers, ray_address) as runner:
+        ended = [0]
+
+        def episode_ended() -> None:
+            ended[0] += 1
+            bar.detail = f"{stages[min(st.stage, len(stages) - 1)].name}, {ended[0]} episodes"
+            bar.set(bar.n)
+
+        runner.on_result = episode_ended
 
         def budget_left(n: int) -> int:
             return n if episodes is None else max(0, min(n, episodes - st.episodes))

@@ -18,7 +18,25 @@ from mrexplore.threads import thread_count
 if TYPE_CHECKING:
     from mrexplore.global_planning.learned.ncm_network import NcmCritic, NcmNet
 
-__all__ = ["NcmPlanner", "NcmStep", "matched_targets_np"]
+__all__ = ["NcmPlanner", "NcmStep", "matched_targets_np", "first_best", "TIE_TOL"]
+
+TIE_TOL = 1e-3
+"""Logits this close count as equal when deciding: a robot takes the first of the nodes within ``TIE_TOL`` of
+its best, and the matched variant compares logits rounded to this step. The network's float32 arithmetic
+rounds differently in NumPy and torch (and between CPUs) by about 1e-6; without a tolerance, nodes whose
+logits tie in exact arithmetic (symmetric places) went one way or the other."""
+
+
+def first_best(rows: NDArray[np.floating]) -> NDArray[np.int64]:
+    """``(m,)`` each row's first entry within :data:`TIE_TOL` of its largest.
+
+    Examples
+    --------
+    >>> first_best(np.array([[1.0, 3.0, 3.0005], [-np.inf, 2.0, 1.0]])).tolist()
+    [1, 1]
+    """
+    best = rows.max(axis=1, keepdims=True)
+    return np.argmax(rows >= best - TIE_TOL, axis=1).astype(np.int64)
 
 
 @dataclass(frozen=True)
@@ -49,10 +67,10 @@ def matched_targets_np(logits: NDArray[np.floating]) -> NDArray[np.int64]:
 @dataclass
 class NcmPlanner:
     """NCM behind the :class:`~mrexplore.global_planning.protocol.GlobalPlanner` protocol: each robot takes
-    the node of largest logit (``sample=False``, the deterministic variant), draws its own (NCM's
-    evaluation) with the problem's generator, or (``match``, deterministic) the robots take the joint
-    choice of largest summed logit with every node used once before any is shared. A robot with no
-    allowed node gets none.
+    the node of largest logit (``sample=False``, the deterministic variant; near-ties by :data:`TIE_TOL`),
+    draws its own (NCM's evaluation) with the problem's generator, or (``match``, deterministic) the robots
+    take the joint choice of largest summed logit with every node used once before any is shared. A robot
+    with no allowed node gets none.
 
     ``net`` is the NumPy network (what the strategies run) or the torch one (training). With ``record``
     (a list) and a ``critic``, each sampled decision is appended as an :class:`NcmStep` (torch only);
@@ -103,9 +121,9 @@ class NcmPlanner:
             seed = int(problem.rng.integers(2**62)) if problem.rng is not None else 0
             picks = self._draw(rows, seed)
         elif self.match:
-            picks = matched_targets_np(rows)
+            picks = matched_targets_np(np.round(rows.astype(np.float64) / TIE_TOL) * TIE_TOL)
         else:
-            picks = rows.argmax(axis=1)
+            picks = first_best(rows)
         out[ok] = picks
         if self.record is not None:
             self._record(inputs, batch, rows, picks, out)

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrexplore.config import LearnedConfig
-from mrexplore.global_planning.learned.features import GraphInputs
+from mrexplore.global_planning.learned.features import EDGE_FEATURES, GraphInputs
 from mrexplore.global_planning.learned.ncm_inputs import NcmConfig, NcmInputs
 
 __all__ = ["GraphNetNp", "NcmNetNp", "log_optimal_transport_np"]
@@ -153,11 +153,14 @@ class GraphNetNp:
         last = self.score.last
         return not (last.wt.any() or (last.b is not None and last.b.any()))
 
+    @property
+    def edge_weights(self) -> NDArray[np.float64]:
+        """The linear edge path's weights, ``(EDGE_FEATURES,)`` (zero for a policy saved without one)."""
+        return self.edge_w.astype(np.float64) if len(self.edge_w) else np.zeros(EDGE_FEATURES)
+
     def edge_path(self, g: GraphInputs) -> F32:
         """The linear edge path's part of the residual, ``(R, C)``."""
-        if not len(self.edge_w):
-            return np.zeros(g.edges.shape[:2], np.float32)
-        return g.edges @ self.edge_w
+        return g.edges @ self.edge_weights.astype(np.float32)
 
     def residual(self, g: GraphInputs) -> F32:
         """The learned part of the affinity, ``(R, C)``: the scoring MLP over the encoded nodes plus the
@@ -222,7 +225,7 @@ def log_optimal_transport_np(scores: F32, dustbin: float, iters: int, mask: NDAr
     Examples
     --------
     >>> p = np.exp(log_optimal_transport_np(np.zeros((2, 3), np.float32), 0.0, iters=3))
-    >>> p[0].round(4).tolist(), p[2].round(4).tolist()
+    >>> p[0].astype(float).round(4).tolist(), p[2].astype(float).round(4).tolist()
     ([0.2, 0.2, 0.2, 0.4], [0.6, 0.6, 0.6, 1.2])
     """
     m, n = scores.shape

@@ -26,6 +26,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "LearnedPlanner",
+    "edge_path64",
     "PolicyStep",
     "hungarian_decode",
     "sample_sequential",
@@ -130,6 +131,21 @@ def assignment_score(affinity: Tensor, candidates: Tensor) -> Tensor:
     return (picked * (candidates >= 0)).sum(-1)
 
 
+def edge_path64(g: GraphInputs, w: NDArray[np.floating]) -> NDArray[np.float64]:
+    """The linear edge path, ``edges . w`` ``(R, C)``, in float64 (one rounding for every library).
+
+    Examples
+    --------
+    >>> from mrexplore.global_planning.learned.features import EDGE_FEATURES
+    >>> e = np.zeros((1, 2, EDGE_FEATURES), np.float32); e[0, :, 0] = [1.0, 2.0]
+    >>> g = GraphInputs(np.zeros((1, 3), np.float32), np.zeros((2, 4), np.float32), e, np.ones((1, 2), bool),
+    ...                 np.zeros((1, 2), np.float32))
+    >>> edge_path64(g, np.array([-0.5, 0, 0, 0, 0])).tolist()
+    [[-0.5, -1.0]]
+    """
+    return g.edges.astype(np.float64) @ np.asarray(w, np.float64)
+
+
 @dataclass
 class PolicyStep:
     """What the sampling planner did at one decision (for PPO)."""
@@ -186,9 +202,16 @@ class LearnedPlanner:
     def _cost(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64], float]:
         """The affinity in cost form, ``cost - base_scale * residual`` (``inf`` where unreachable)."""
         g = graph_inputs(problem, self.net.cfg, self.heuristic)
+        cost = utility_cost(problem, self.heuristic)
+        if self.record is None and self.net.scores_nothing():
+            # The scoring MLP adds zero: the residual is the linear edge path alone, and the blocks of
+            # attention would run for nothing (1.1 of the 1.7 ms the learned assignment took a decision at
+            # 8 robots on the largest HouseExpo map). It is computed in float64, on either network: in
+            # float32 its rounding depended on the library (and on the CPU's code path), and assignments
+            # whose sums tie exactly (robots swapping clusters at equal distances) went one way or the other.
+            return g, cost - self.net.cfg.base_scale * edge_path64(g, self.net.edge_weights), 0.0
         if isinstance(self.net, GraphNetNp):
-            residual = self.net.residual(g).astype(np.float64)
-            return g, utility_cost(problem, self.heuristic) - self.net.cfg.base_scale * residual, 0.0
+            return g, cost - self.net.cfg.base_scale * self.net.residual(g).astype(np.float64), 0.0
         import torch
 
         from mrexplore.global_planning.learned.network import collate
@@ -196,23 +219,15 @@ class LearnedPlanner:
         with torch.no_grad():
             batch = collate([g])
             value = 0.0
-            if self.record is None and self.net.scores_nothing():
-                # The scoring MLP adds zero: its blocks of attention would run for nothing (1.1 of the 1.7 ms
-                # the learned assignment took a decision at 8 robots on the largest HouseExpo map). Where the
-                # edge path is zero too, the sign of a zero may differ, which subtracting it from the cost
-                # leaves without effect.
-                learned = self.net.edge_path(batch)
-            else:
-                vr, vc = self.net.encode(batch)
-                learned = self.net.residual(vr, vc, batch)
-                if self.record is not None:
-                    extra = torch.zeros(1, self.net.value_inputs)
-                    if self.value_extra is not None:
-                        extra = torch.from_numpy(self.value_extra[None])
-                    value = float(self.net.value_of(vr, vc, batch, extra)[0])
+            vr, vc = self.net.encode(batch)
+            learned = self.net.residual(vr, vc, batch)
+            if self.record is not None:
+                extra = torch.zeros(1, self.net.value_inputs)
+                if self.value_extra is not None:
+                    extra = torch.from_numpy(self.value_extra[None])
+                value = float(self.net.value_of(vr, vc, batch, extra)[0])
         residual = learned[0, : g.n_robots, : g.n_clusters].double().numpy()
-        cost = utility_cost(problem, self.heuristic) - self.net.cfg.base_scale * residual  # inf stays inf
-        return g, cost, value
+        return g, cost - self.net.cfg.base_scale * residual, value  # inf stays inf
 
     def assign(self, problem: AssignmentProblem) -> Assignment:
         g, cost, value = self._cost(problem)
