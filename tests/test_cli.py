@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import csv
 import json
 import subprocess
 import sys
@@ -175,7 +176,14 @@ def test_train_smoke_then_explore_with_that_policy(tmp_path, capsys) -> None:
     args = ["train", "--out", str(out), "--config", str(cfg), "--workers", "1", "--train-maps", str(tmp_path / "none")]
     assert main(args) == 0
     captured = capsys.readouterr()
-    assert "kept stage" in captured.out and "procedural floor plans only" in captured.err
+    assert "procedural floor plans only" in captured.err
+    with open(out / "stages.csv", newline="") as f:
+        kept = [r["stage"] for r in csv.DictReader(f) if r["kept"] == "1"]
+    assert len(kept) == 1
+    if kept == ["baseline"]:
+        assert captured.out.startswith("kept the baseline, no trained stage beat it on validation")
+    else:
+        assert captured.out.startswith(f"kept stage {kept[0]} (validation ")
     assert (out / "policy.npz").is_file() and (out / "log.csv").is_file()
     assert main(["explore", *FAST, "--strategy", "hier", "--policy", str(out / "policy.npz"), "--json"]) == 0
     rec = json.loads(capsys.readouterr().out)
@@ -183,6 +191,22 @@ def test_train_smoke_then_explore_with_that_policy(tmp_path, capsys) -> None:
 
     assert rec["policy"]["sha256"] == hashlib.sha256((out / "policy.npz").read_bytes()).hexdigest()
     assert rec["coverage"] >= 0.99
+
+
+def test_a_run_that_keeps_its_baseline_says_so(tmp_path, capsys) -> None:
+    """One episode of budget: no trained stage beats the baseline, and the last line and stages.csv say the
+    policy is the untrained start."""
+    cfg = tmp_path / "tiny.yaml"
+    cfg.write_text("train:\n  resolution_m: 0.2\n  robots_max: 2\n  max_steps: 60\n  val_maps: 1\n")
+    out = tmp_path / "run"
+    args = ["train", "--out", str(out), "--config", str(cfg), "--workers", "1", "--episodes", "1"]
+    assert main([*args, "--train-maps", str(tmp_path / "none")]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.startswith("kept the baseline, no trained stage beat it on validation (")
+    assert "): the policy is the untrained start (hier-heuristic's cost); train longer; wrote " in line
+    with open(out / "stages.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert rows[0]["stage"] == "baseline" and [r["stage"] for r in rows if r["kept"] == "1"] == ["baseline"]
 
 
 def test_train_and_policy_errors_are_one_line(tmp_path, capsys) -> None:

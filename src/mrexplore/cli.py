@@ -47,6 +47,10 @@ CONFIG_HEADER = (
     "--config FILE to explore, bench or train; flags given on the command line override it."
 )
 DEFAULT_STRATEGY = "hier"
+TRAIN_METHOD = (
+    "train the learned global layer: hier by a cross-entropy search over its edge weights, then imitation of "
+    "a lookahead expert (DAgger), PPO optional; ncm (NeuralCoMapping) by PPO"
+)
 COMMITMENT_HELP = "goal hysteresis in [0, 1] (1: none; default: 0.5 for nearest/utility, 1 for hier)"
 POLICY_HELP = (
     "weights of the learned strategies (hier, ncm), written by 'mrexplore train': FILE, or KIND=FILE pairs "
@@ -257,7 +261,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_progress(be)
     tr = sub.add_parser(
         "train",
-        help="train the learned global layer (imitation of a lookahead expert, then PPO) or the ncm baseline (PPO)",
+        help=TRAIN_METHOD,
     )
     tr.add_argument("--out", required=True, help="folder for policy.npz, checkpoints, log.csv and stages.csv")
     tr.add_argument(
@@ -739,10 +743,14 @@ def _train(args: argparse.Namespace) -> str:
     )
     best = next(r for r in result.stages if r["stage"] == result.best_stage)
     sampled = f", sampled {best['val_sampled_steps_mean']:.1f}" if best.get("val_sampled_steps_mean") else ""
-    return (
-        f"kept stage {result.best_stage} (validation {best['val_steps_mean']:.1f} steps{sampled}); "
-        f"wrote {result.policy_path} and {result.policy_path.parent / 'stages.csv'}"
-    )
+    wrote = f"wrote {result.policy_path} and {result.policy_path.parent / 'stages.csv'}"
+    if result.best_stage == "baseline":
+        start = "hier-heuristic's cost" if run.train.strategy == "hier" else "an untrained network"
+        return (
+            f"kept the baseline, no trained stage beat it on validation ({best['val_steps_mean']:.1f} steps"
+            f"{sampled}): the policy is the untrained start ({start}); train longer; {wrote}"
+        )
+    return f"kept stage {result.best_stage} (validation {best['val_steps_mean']:.1f} steps{sampled}); {wrote}"
 
 
 def _strategy(args: argparse.Namespace, run: RunConfig) -> Any:

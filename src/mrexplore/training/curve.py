@@ -8,10 +8,11 @@ from pathlib import Path
 __all__ = ["plot_learning_curve"]
 
 
-def plot_learning_curve(log_csv: Path, png: Path) -> bool:
-    """Validation steps per stage (deterministic, and sampled where logged), with the expert's agreement and
-    gain on the way, or the training episodes' steps and return for a run without an expert; returns
-    False (writing nothing) where matplotlib is not installed."""
+def plot_learning_curve(log_csv: Path, png: Path, strategy: str = "hier", kept: str | None = None) -> bool:
+    """Validation steps per stage (deterministic, and sampled where logged), the kept stage marked, with the
+    expert's agreement and gain on the way, or the training episodes' steps and return for a run without an
+    expert, in a lower panel where the run logged any; returns False (writing nothing) where matplotlib is
+    not installed."""
     try:
         import matplotlib
 
@@ -27,19 +28,33 @@ def plot_learning_curve(log_csv: Path, png: Path) -> bool:
     def col(name: str) -> list[float]:
         return [float(r[name]) if r.get(name) else float("nan") for r in rows]
 
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    agreement = col("expert_agreement")
+    expert = any(v == v for v in agreement)  # NaN is the only value unequal to itself
+    lower = expert or any(v == v for v in col("steps_mean") + col("return_mean"))
+    if lower:
+        fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    else:  # the baseline alone, or stages that log no training episodes
+        fig, ax1 = plt.subplots(1, 1, figsize=(7, 3.5))
     ax1.plot(x, col("val_steps_mean"), "o-", color="tab:blue", label="validation steps (mean, deterministic)")
     sampled = col("val_sampled_steps_mean")
-    has_sampled = any(v == v for v in sampled)  # NaN is the only value unequal to itself
+    has_sampled = any(v == v for v in sampled)
     if has_sampled:
         ax1.plot(x, sampled, "D-", color="tab:orange", label="validation steps (mean, sampled)")
     start = "untrained start" if has_sampled else "heuristic start (hier-heuristic)"
     ax1.axhline(col("val_steps_mean")[0], color="grey", ls="--", lw=1, label=start)
-    ax1.set_ylabel("steps")
+    if kept in stages:
+        k = stages.index(kept)
+        ax1.plot([k], [col("val_steps_mean")[k]], "*", ms=16, color="gold", mec="black", label=f"kept: {kept}")
+    ax1.set_ylabel("validation steps")
     ax1.legend(loc="upper right", fontsize=8)
-    ax1.set_title(f"training run {Path(log_csv).parent.name}")
-    agreement = col("expert_agreement")
-    if any(v == v for v in agreement):
+    ax1.set_title(f"mrexplore train --strategy {strategy}: {len(rows)} stage{'s' * (len(rows) != 1)}, kept {kept}")
+    if not lower:
+        ax1.set_xticks(x, stages, rotation=30)
+        fig.tight_layout()
+        fig.savefig(png, dpi=110)
+        plt.close(fig)
+        return True
+    if expert:
         ax2.plot(x, agreement, "s-", color="tab:green", label="expert agreement (training data)")
         ax2.set_ylabel("share")
         ax2.set_ylim(0, 1)

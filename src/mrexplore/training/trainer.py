@@ -60,7 +60,10 @@ _STAGE_COLUMNS = (
     "stage", "episodes", "labels", "expert_gain", "expert_agreement", "val_steps_mean", "val_coverage_mean",
     "val_score", "val_sampled_steps_mean", "val_sampled_coverage_mean", "edge_weights", "time_s",
 )  # fmt: skip
-"""The columns of ``stages.csv`` (the sampled and score ones only where the run has them)."""
+"""The columns of ``stages.csv`` (the sampled and score ones only where the run has them), then ``kept``: 1 on
+the stage whose policy the run kept (``baseline``: no trained stage beat the untrained start)."""
+VALIDATION_MARGIN = 1.1
+"""A stage's training stops this many validations' time before the deadline."""
 
 
 def split_maps(train_dir: Path | None, val_maps: int, plans: str = "varied") -> tuple[list[str], list[str]]:
@@ -228,19 +231,36 @@ def train(
         def validate(weights: bytes | None, kind: JobKind = JobKind.EVAL) -> tuple[float, float, np.ndarray]:
             """Mean steps and coverage, and the steps to the end and to 99% per map (2 x maps, in order)."""
             jobs = [EpisodeJob(kind, m, cfg.val_robots, i, weights, cfg, i) for i, m in enumerate(val_maps)]
-            res = runner.results(placed(jobs), math.inf)
+            res = runner.results(placed(jobs), math.inf)  # a validation always ends: the budget leaves room
             per_map = np.array([[r["steps"] for r in res], [r["steps_99"] for r in res]], dtype=np.float64)
             return float(per_map[0].mean()), float(np.mean([r["coverage"] for r in res])), per_map
 
+        # The budget is a budget: a stage's training episodes stop early enough for its validation to end
+        # by the deadline (as long as the last validation took), and no stage starts that has not that time.
+        val_s = 0.0
+        train_until = deadline
         ctx = StageContext(
-            cfg, net, opt, st, data, rng, train_maps, lambda jobs: runner.results(placed(jobs), deadline), budget_left
+            cfg,
+            net,
+            opt,
+            st,
+            data,
+            rng,
+            train_maps,
+            lambda jobs: runner.results(placed(jobs), train_until),
+            budget_left,
         )
         while st.stage < len(stages):
             stage = stages[st.stage]
             need = stage.min_episodes(cfg)
-            if time.perf_counter() > deadline or (need > 0 and episodes is not None and st.episodes >= episodes):
+            now = time.perf_counter()
+            if now > deadline or (need > 0 and episodes is not None and st.episodes >= episodes):
                 say(f"budget spent before stage {stage.name}; stopping")
                 break
+            if st.stage > 0 and now + VALIDATION_MARGIN * val_s > deadline:
+                say(f"{deadline - now:.0f} s left, under a validation's {val_s:.0f} s; stopping before {stage.name}")
+                break
+            train_until = deadline - VALIDATION_MARGIN * val_s
             if (left := budget_left(need)) < need:
                 # the stage needs more episodes than are left: go on to the stages that fit the budget
                 say(f"{left} episodes left, under {stage.unit}'s {need}; skipping {stage.name}")
@@ -251,6 +271,7 @@ def train(
             # collect and train
             row: dict[str, Any] = {"stage": stage.name} | stage.learn(ctx)
             # validate (deterministic decoding, held-out maps) and keep the best
+            t_val = time.perf_counter()
             weights = stage.validation_weights(ctx)
             row["val_steps_mean"], row["val_coverage_mean"], per_map = validate(weights)
             chosen_by = "val_steps_mean"
@@ -266,6 +287,7 @@ def train(
                 row["val_sampled_steps_mean"], row["val_sampled_coverage_mean"] = steps_s, cov_s
                 if cfg.ncm.select == "sampled":
                     chosen_by, cov_key = "val_sampled_steps_mean", "val_sampled_coverage_mean"
+            val_s = time.perf_counter() - t_val
             # keep the best: fewest validation steps (or the best score), at no less coverage than the yardstick
             if stage.yardstick or (row[chosen_by] < st.best_val and row[cov_key] >= st.stage_rows[0][cov_key] - 0.005):
                 st.best_val, st.best_stage = row[chosen_by], stage.name
@@ -294,11 +316,12 @@ def train(
             bar.update()
     bar.close()
     shutil.copyfile(out / "best.npz", out / "policy.npz")
-    plot_learning_curve(out / "log.csv", out / "curve.png")
+    plot_learning_curve(out / "log.csv", out / "curve.png", cfg.strategy, st.best_stage)
+    rows = [r | {"kept": int(r["stage"] == st.best_stage)} for r in st.stage_rows]
     with open(out / "stages.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(st.stage_rows[0]))
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
-        w.writerows(st.stage_rows)
+        w.writerows(rows)
     return TrainResult(out / "policy.npz", st.best_stage, st.stage_rows)
 
 
