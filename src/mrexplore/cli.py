@@ -810,14 +810,17 @@ def _explore(args: argparse.Namespace) -> dict[str, Any]:
     from mrexplore.render import GifRecorder, save_png
 
     sim_cfg, mission_cfg = run.sim, run.mission
-    recorder = GifRecorder() if (args.gif or args.png) else None
+    recorder = None
+    if args.gif or args.png:
+        title = f"{truth.name}: {strategy.name}, {sim_cfg.robots} robot{'s' * (sim_cfg.robots != 1)}"
+        recorder = GifRecorder(title=title, faults=mission_cfg.faults != FaultConfig())
     result = run_mission(
         MissionSpec(truth, strategy, sim_cfg, mission_cfg, seed=args.seed, starts_rc=starts),
         observer=recorder,
         progress=args.progress,
     )
     if recorder is not None and args.gif:
-        recorder.save_gif(args.gif)
+        recorder.save_gif(args.gif, progress=args.progress)
     if recorder is not None and args.png:
         save_png(recorder.final_frame(), args.png)
     if args.save_map:

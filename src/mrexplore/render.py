@@ -1,52 +1,58 @@
-"""Pictures of a mission: frames of the centre's map with robots, trails, clusters and goals; GIF and PNG."""
+"""Pictures of a mission: frames of the centre's map with robots, paths, frontier clusters and goals, under a
+title and a step and coverage counter, above a legend and a scale bar; GIF and PNG."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
-from PIL import Image, ImageDraw
+from PIL import Image, ImageDraw, ImageFont
 
 from mrexplore.pipeline import Decision
 from mrexplore.preprocessing.clustering import Clusters
 from mrexplore.preprocessing.transmission import LinkStatus
+from mrexplore.progress import Progress
 from mrexplore.sim.belief import merge_beliefs
 from mrexplore.sim.world import ExplorationSim
 from mrexplore.types import CellState, MrExploreError, StateGrid
 
-__all__ = ["render_frame", "GifRecorder", "save_png"]
+__all__ = ["render_frame", "framed", "GifRecorder", "save_png", "scale_bar_m", "FRONTIER_COLOURS"]
 
 _UNKNOWN = (205, 205, 205)
 _TRUTH_WALL = (172, 172, 172)
 _FREE = (255, 255, 255)
 _OCCUPIED = (20, 20, 20)
 _FAILED = (128, 128, 128)
+_INK = (30, 30, 30)
 _ROBOT_COLOURS = [
     (220, 50, 47),
     (38, 139, 210),
-    (133, 153, 0),
     (211, 54, 130),
-    (181, 137, 0),
-    (42, 161, 152),
-    (108, 113, 196),
     (203, 75, 22),
-]
-_CLUSTER_COLOURS = [
-    (255, 127, 14),
-    (44, 160, 44),
-    (148, 103, 189),
-    (23, 190, 207),
-    (188, 189, 34),
-    (227, 119, 194),
+    (108, 113, 196),
     (140, 86, 75),
-    (31, 119, 180),
+    (181, 137, 0),
+    (0, 60, 130),
 ]
+"""Robots: no green among them, which is the frontiers' colour."""
+FRONTIER_COLOURS = [(0, 170, 0), (90, 220, 90), (0, 110, 50)]
+"""Frontier clusters: three greens, neighbouring clusters told apart by shade."""
+_CENTRE = (0, 90, 0)
 
 
 def _robot_colour(i: int) -> tuple[int, int, int]:
     return _ROBOT_COLOURS[i % len(_ROBOT_COLOURS)]
+
+
+def _font(size: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
+    try:
+        return ImageFont.load_default(size=size)
+    except (TypeError, OSError):  # Pillow without FreeType: its bitmap font, one size
+        return ImageFont.load_default()
 
 
 def render_frame(
@@ -60,44 +66,44 @@ def render_frame(
     failed: NDArray[np.bool_] | None = None,
     unheard: NDArray[np.bool_] | None = None,
 ) -> Image.Image:
-    """One RGB picture: ground truth faded under the belief, cluster members, trails, robots, goals.
+    """The map alone: ground truth faded under the belief, paths, frontier clusters, goals, robots.
 
-    ``scale`` is output pixels per cell (below 1 shrinks, box-averaged). Faults: a ``failed`` robot is
-    drawn grey and crossed out; one the centre does not assign to (``unheard``: silent too long, out of
-    range, or not heard since the centre restarted) as a ring without fill.
+    ``scale`` is output pixels per cell (below 1 shrinks, box-averaged). Frontier cells are drawn after
+    scaling, at least 2 pixels wide, so that they stay visible on large maps; each cluster's centre is a
+    dark green diamond. Faults: a ``failed`` robot is drawn grey and crossed out; one the centre does not
+    assign to (``unheard``: silent too long, out of range, or not heard since the centre restarted) as a
+    ring without fill.
     """
     rgb = np.empty((*state.shape, 3), dtype=np.uint8)
     rgb[:] = _UNKNOWN
     rgb[truth_occupied] = _TRUTH_WALL
     rgb[state == CellState.FREE] = _FREE
     rgb[state == CellState.OCCUPIED] = _OCCUPIED
-    if clusters is not None and len(clusters):
-        colours = np.array(_CLUSTER_COLOURS, dtype=np.uint8)[clusters.labels % len(_CLUSTER_COLOURS)]
-        rgb[clusters.members_rc[:, 0], clusters.members_rc[:, 1]] = colours
     img = Image.fromarray(rgb)
     if scale != 1.0:
         size = (max(1, round(img.width * scale)), max(1, round(img.height * scale)))
         img = img.resize(size, Image.Resampling.BOX if scale < 1 else Image.Resampling.NEAREST)
-    draw = ImageDraw.Draw(img)
     rad = max(2.0, 3.0 * max(scale, 0.5))
+    if clusters is not None and len(clusters):
+        img = _paint_frontiers(img, clusters, scale)
+    draw = ImageDraw.Draw(img)
     for i, trail in enumerate(trails):
         if len(trail) > 1:
-            light = tuple(int(v + (255 - v) * 0.45) for v in _robot_colour(i))
             xy = [((c + 0.5) * scale, (r + 0.5) * scale) for r, c in np.asarray(trail)]
-            draw.line(xy, fill=light, width=max(1, round(scale)))
+            draw.line(xy, fill=_light(_robot_colour(i)), width=max(1, round(scale)))
+    if clusters is not None:
+        for r, c in np.asarray(clusters.centers_rc):
+            x, y = (c + 0.5) * scale, (r + 0.5) * scale
+            draw.polygon([(x, y - rad), (x + rad, y), (x, y + rad), (x - rad, y)], fill=_CENTRE, outline=(0, 0, 0))
     for i, (r, c) in enumerate(np.asarray(goals_rc)):
-        if r < 0:
-            continue
-        x, y = (c + 0.5) * scale, (r + 0.5) * scale
-        draw.line([(x - rad, y - rad), (x + rad, y + rad)], fill=_robot_colour(i), width=2)
-        draw.line([(x - rad, y + rad), (x + rad, y - rad)], fill=_robot_colour(i), width=2)
+        if r >= 0:
+            _cross(draw, (c + 0.5) * scale, (r + 0.5) * scale, rad, _robot_colour(i), 2)
     for i, (r, c) in enumerate(np.asarray(positions_rc)):
         x, y = (c + 0.5) * scale, (r + 0.5) * scale
         box = [x - rad, y - rad, x + rad, y + rad]
         if failed is not None and failed[i]:
             draw.ellipse(box, fill=_FAILED, outline=(0, 0, 0))
-            draw.line([(x - rad, y - rad), (x + rad, y + rad)], fill=(0, 0, 0), width=1)
-            draw.line([(x - rad, y + rad), (x + rad, y - rad)], fill=(0, 0, 0), width=1)
+            _cross(draw, x, y, rad, (0, 0, 0), 1)
         elif unheard is not None and unheard[i]:
             draw.ellipse(box, fill=None, outline=_robot_colour(i), width=2)
         else:
@@ -105,12 +111,151 @@ def render_frame(
     return img
 
 
-class GifRecorder:
-    """Mission observer that keeps a frame every ``every`` steps (at most ``max_side`` pixels a side)."""
+def _light(colour: tuple[int, int, int]) -> tuple[int, int, int]:
+    r, g, b = (int(v + (255 - v) * 0.45) for v in colour)
+    return r, g, b
 
-    def __init__(self, every: int = 10, max_side: int = 480) -> None:
+
+def _cross(draw: ImageDraw.ImageDraw, x: float, y: float, rad: float, colour: tuple[int, int, int], w: int) -> None:
+    draw.line([(x - rad, y - rad), (x + rad, y + rad)], fill=colour, width=w)
+    draw.line([(x - rad, y + rad), (x + rad, y - rad)], fill=colour, width=w)
+
+
+def _paint_frontiers(img: Image.Image, clusters: Clusters, scale: float) -> Image.Image:
+    """Frontier cells as squares of at least 2 pixels, in their cluster's green."""
+    px = np.array(img)
+    side = max(2, round(scale))
+    h, w = px.shape[:2]
+    top = np.clip(np.round((clusters.members_rc[:, 0] + 0.5) * scale - side / 2).astype(np.int64), 0, h - 1)
+    left = np.clip(np.round((clusters.members_rc[:, 1] + 0.5) * scale - side / 2).astype(np.int64), 0, w - 1)
+    colours = np.array(FRONTIER_COLOURS, np.uint8)[clusters.labels % len(FRONTIER_COLOURS)]
+    for dr in range(side):
+        for dc in range(side):
+            px[np.minimum(top + dr, h - 1), np.minimum(left + dc, w - 1)] = colours
+    return Image.fromarray(px)
+
+
+def scale_bar_m(metres_per_px: float, target_px: float) -> float:
+    """The round length (1, 2 or 5 times a power of ten, metres) whose bar is nearest ``target_px`` wide
+    without passing it.
+
+    Examples
+    --------
+    >>> scale_bar_m(0.05, 100), scale_bar_m(0.5, 100), scale_bar_m(0.01, 120)
+    (5.0, 50.0, 1.0)
+    """
+    most = metres_per_px * target_px
+    power = 10.0 ** math.floor(math.log10(most))
+    return max(m * power for m in (1, 2, 5) if m * power <= most)
+
+
+@dataclass(frozen=True)
+class Caption:
+    """What a frame says around its map: the title, the counter, the legend's fault entries."""
+
+    title: str
+    step: int
+    coverage: float
+    faults: bool = False
+
+
+_PAD = 6
+
+
+def _legend_items(faults: bool) -> list[tuple[str, str]]:
+    items = [("robot", "robot"), ("path", "path"), ("goal", "goal"), ("frontier", "frontier cluster")]
+    items += [("centre", "cluster centre"), ("unknown", "unexplored"), ("free", "explored"), ("wall", "wall")]
+    items += [("truth", "wall not yet seen")]
+    if faults:
+        items += [("failed", "failed robot"), ("unheard", "not heard")]
+    return items
+
+
+def _swatch(draw: ImageDraw.ImageDraw, kind: str, x: float, y: float, s: float) -> None:
+    """A legend symbol in the box ``(x, y)`` to ``(x + s, y + s)``."""
+    cx, cy, rad = x + s / 2, y + s / 2, s / 2 - 1
+    if kind == "robot":
+        draw.ellipse([cx - rad, cy - rad, cx + rad, cy + rad], fill=_robot_colour(0), outline=(0, 0, 0))
+    elif kind == "path":
+        draw.line([(x, cy), (x + s, cy)], fill=_light(_robot_colour(0)), width=3)
+    elif kind == "goal":
+        _cross(draw, cx, cy, rad, _robot_colour(0), 2)
+    elif kind == "frontier":
+        third = s / 3
+        for k, colour in enumerate(FRONTIER_COLOURS):
+            draw.rectangle([x + k * third, y + 2, x + (k + 1) * third - 1, y + s - 2], fill=colour)
+    elif kind == "centre":
+        draw.polygon([(cx, y), (x + s, cy), (cx, y + s), (x, cy)], fill=_CENTRE, outline=(0, 0, 0))
+    elif kind == "failed":
+        draw.ellipse([cx - rad, cy - rad, cx + rad, cy + rad], fill=_FAILED, outline=(0, 0, 0))
+        _cross(draw, cx, cy, rad, (0, 0, 0), 1)
+    elif kind == "unheard":
+        draw.ellipse([cx - rad, cy - rad, cx + rad, cy + rad], outline=_robot_colour(0), width=2)
+    else:
+        fill = {"unknown": _UNKNOWN, "free": _FREE, "wall": _OCCUPIED, "truth": _TRUTH_WALL}[kind]
+        draw.rectangle([x, y, x + s, y + s], fill=fill, outline=(120, 120, 120))
+
+
+def framed(map_img: Image.Image, caption: Caption, metres_per_px: float) -> Image.Image:
+    """``map_img`` with a header (title; step and coverage) above it and a legend and a scale bar below."""
+    big, small = _font(14), _font(12)
+    width = max(map_img.width, 380)
+    probe = ImageDraw.Draw(Image.new("RGB", (1, 1)))
+
+    def text_w(text: str, font: ImageFont.FreeTypeFont | ImageFont.ImageFont) -> float:
+        return probe.textlength(text, font=font)
+
+    # legend rows, laid out left to right
+    s, gap = 12, 14
+    rows: list[list[tuple[str, str, float]]] = [[]]
+    x: float = _PAD
+    for kind, label in _legend_items(caption.faults):
+        w = s + 4 + text_w(label, small)
+        if x + w > width - _PAD and rows[-1]:
+            rows.append([])
+            x = _PAD
+        rows[-1].append((kind, label, x))
+        x += w + gap
+    head_h, row_h = 40, 18
+    foot_h = _PAD + row_h * len(rows) + 26
+    out = Image.new("RGB", (width, head_h + map_img.height + foot_h), (255, 255, 255))
+    out.paste(map_img, ((width - map_img.width) // 2, head_h))
+    draw = ImageDraw.Draw(out)
+    draw.text((_PAD, 4), caption.title, fill=_INK, font=big)
+    draw.text((_PAD, 22), f"step {caption.step}   coverage {100 * caption.coverage:.1f}%", fill=_INK, font=small)
+    y = head_h + map_img.height + _PAD
+    for row in rows:
+        for kind, label, lx in row:
+            _swatch(draw, kind, lx, y + 2, s)
+            draw.text((lx + s + 4, y), label, fill=_INK, font=small)
+        y += row_h
+    # the scale bar: a round length near a quarter of the map's width
+    metres = scale_bar_m(metres_per_px, max(20.0, map_img.width / 4))
+    bar = metres / metres_per_px
+    y += 6
+    draw.rectangle([_PAD, y, _PAD + bar, y + 4], fill=_INK)
+    label = f"{metres:g} m"
+    draw.text((_PAD + bar + 6, y - 5), label, fill=_INK, font=small)
+    return out
+
+
+class GifRecorder:
+    """Mission observer that keeps frames for a GIF and the last state for a PNG.
+
+    A frame every ``every`` steps at ``max_side`` pixels a side for the map (small maps enlarged by a whole
+    factor); where a mission runs long, every other frame is dropped and the interval doubled, so that a
+    GIF holds at most ``max_frames`` frames whatever the map (a few MB at most). ``title`` heads every
+    frame; ``faults`` adds the failed and not-heard robots to the legend.
+    """
+
+    def __init__(
+        self, every: int = 10, max_side: int = 480, max_frames: int = 120, title: str = "", faults: bool = False
+    ) -> None:
         self.every = every
         self.max_side = max_side
+        self.max_frames = max_frames
+        self.title = title
+        self.faults = faults
         self.frames: list[Image.Image] = []
         self._trails: list[list[NDArray[np.int32]]] = []
         self._last: tuple[ExplorationSim, Decision | None, NDArray[np.int32], LinkStatus] | None = None
@@ -124,7 +269,15 @@ class GifRecorder:
             self._trails[i].append(sim.positions_rc[i].copy())
         self._last = (sim, decision, goals_rc.copy(), status)
         if sim.steps % self.every == 0:
-            self.frames.append(self._frame(scale=min(1.0, self.max_side / max(sim.truth.shape))))
+            self.frames.append(self._frame(self._gif_scale()))
+            if len(self.frames) >= 2 * self.max_frames:
+                self.frames = self.frames[1::2]
+                self.every *= 2
+
+    def _gif_scale(self) -> float:
+        assert self._last is not None
+        side = max(self._last[0].truth.shape)
+        return self.max_side / side if side > self.max_side else float(max(1, self.max_side // side))
 
     def _frame(self, scale: float) -> Image.Image:
         assert self._last is not None
@@ -132,7 +285,7 @@ class GifRecorder:
         state = merge_beliefs(sim.beliefs).state(sim.cfg.sensor)  # the team's raw knowledge
         trails = [np.asarray(t, dtype=np.int32) for t in self._trails]
         clusters = decision.clusters if decision is not None else None
-        return render_frame(
+        img = render_frame(
             sim.truth.occupied,
             state,
             sim.positions_rc,
@@ -143,6 +296,9 @@ class GifRecorder:
             failed=~sim.alive,
             unheard=~status.assignable,
         )
+        title = self.title or f"{sim.truth.name}, {sim.n_robots} robots"
+        caption = Caption(title, sim.steps, sim.coverage, self.faults)
+        return framed(img, caption, sim.truth.frame.resolution_m / scale)
 
     def final_frame(self, min_side: int = 400) -> Image.Image:
         """The last state at full resolution (enlarged for small maps)."""
@@ -150,18 +306,43 @@ class GifRecorder:
         side = max(self._last[0].truth.shape)
         return self._frame(scale=max(1.0, float(np.ceil(min_side / side))))
 
-    def save_gif(self, path: str | Path, frame_ms: int = 80) -> None:
-        """Write the frames (plus the final state, held longer) as a looping GIF."""
+    def save_gif(self, path: str | Path, frame_ms: int = 80, progress: bool | None = None) -> None:
+        """Write at most ``max_frames`` frames (plus the final state, held longer) as a looping GIF, with one
+        palette for all, showing progress."""
         if self._last is None:
             raise MrExploreError("no frames recorded; run a mission with the recorder as observer")
-        frames = [*self.frames, self._frame(scale=min(1.0, self.max_side / max(self._last[0].truth.shape)))]
-        durations = [frame_ms] * (len(frames) - 1) + [2000]
+        keep = self.frames
+        if len(keep) > self.max_frames:
+            picks = np.linspace(0, len(keep) - 1, self.max_frames).round().astype(int)
+            keep = [keep[i] for i in picks]
+        last = self._frame(self._gif_scale())
+        frames = [f for f in keep if f.size == last.size] + [last]
+        palette = _gif_palette()
+        bar = Progress(len(frames), "writing GIF", "frames", progress)
+        coded = []
+        for f in frames:
+            coded.append(f.quantize(palette=palette, dither=Image.Dither.NONE))
+            bar.update()
+        bar.close()
+        durations = [frame_ms] * (len(coded) - 1) + [2000]
         _write(
             path,
-            lambda p: frames[0].save(
-                p, save_all=True, append_images=frames[1:], duration=durations, loop=0, optimize=False
-            ),
+            lambda p: coded[0].save(p, save_all=True, append_images=coded[1:], duration=durations, loop=0),
         )
+
+
+def _gif_palette() -> Image.Image:
+    """One palette for every frame: the colours drawn (robots and their paths, frontiers, map states), and
+    a ramp of greys and of each robot's colour for the edges that scaling and text smooth."""
+    colours = [_UNKNOWN, _TRUTH_WALL, _FREE, _OCCUPIED, _FAILED, _INK, _CENTRE, (0, 0, 0), (120, 120, 120)]
+    colours += FRONTIER_COLOURS + _ROBOT_COLOURS + [_light(c) for c in _ROBOT_COLOURS]
+    colours += [(v, v, v) for v in range(0, 256, 8)]
+    for c in _ROBOT_COLOURS + FRONTIER_COLOURS:
+        colours += [tuple(int(v + (255 - v) * t) for v in c) for t in (0.2, 0.65, 0.85)]  # type: ignore[misc]
+    flat = [v for c in colours[:256] for v in c]
+    pal = Image.new("P", (1, 1))
+    pal.putpalette(flat + [0] * (768 - len(flat)))
+    return pal
 
 
 def save_png(img: Image.Image, path: str | Path) -> None:
