@@ -159,7 +159,7 @@ def _add_progress(p: argparse.ArgumentParser) -> None:
         "--progress",
         action=argparse.BooleanOptionalAction,
         default=None,
-        help="show a progress bar (default: only on a terminal)",
+        help="--progress: a bar; --no-progress: nothing (default: a bar on a terminal, else a line every 5 s)",
     )
 
 

@@ -248,7 +248,7 @@ def per_map_table(rows: list[Row], strategies: Sequence[str]) -> str:
         {(r["size_class"], r["dataset"], r["map"]) for r in rows},
         key=lambda t: (CLASSES.index(t[0]) if t[0] in CLASSES else 9, t[1], t[2]),
     )
-    head = "| map | dataset | class | bound | " + " | ".join(strategies) + " |"
+    head = "| map | dataset | area class | bound | " + " | ".join(strategies) + " |"
     lines = [head, "|" + " --- |" * (4 + len(strategies))]
     for cls, dataset, m in maps:
         cells = []
@@ -360,7 +360,8 @@ def write_report(results_csv: Path, report_md: Path, strategies: Sequence[str], 
             "# Benchmark report",
             f"Made by: `{command}`",
             f"{len(rows)} episodes: {n_maps} maps, strategies {', '.join(strategies)}, seeds {seeds}. "
-            "Size classes by explorable free area: small < 100 m², middle 100-300 m², large > 300 m². "
+            "Size classes by explorable free area, not difficulty: small < 100 m², middle 100-300 m², large > 300 m² "
+            "(DungeonMaps' easy, medium and complex maps are all large). "
             "Steps: mean ± std over maps and seeds; coverage: mean; improvement: against the best other "
             f"strategy's mean steps in the class (yardsticks {', '.join(sorted(YARDSTICKS))} excluded).",
             "## Table I: coverage and steps by size class",
