@@ -144,6 +144,7 @@ def test_bench_cli_writes_report(tmp_path, capsys) -> None:
             assert img.size[0] > 250
 
 
+@pytest.mark.slow
 def test_bench_through_ray_on_a_local_instance(tmp_path) -> None:
     pytest.importorskip("ray", reason="Ray is the optional scale-out path: pip install 'mrexplore[ray]'")
     specs = [EpisodeSpec("generated:1", "nearest", 2, seed, **FAST) for seed in (0, 1)]

@@ -11,9 +11,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from conftest import requires_rclpy
 
-pytestmark = requires_rclpy
+pytestmark = [requires_rclpy, pytest.mark.slow]
 
 
 def test_the_centre_node_plans_reads_nav2_and_survives_bad_messages() -> None:

@@ -9,9 +9,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from conftest import requires_rclpy
 
-pytestmark = requires_rclpy
+pytestmark = [requires_rclpy, pytest.mark.slow]
 
 
 def test_the_robot_node_speaks_the_protocol_and_survives_a_bad_map() -> None:

@@ -235,6 +235,7 @@ def test_ncm_trains_with_the_same_stages_logs_and_resume(tmp_path: Path) -> None
         load_policy(out / "policy.npz")
 
 
+@pytest.mark.slow
 def test_ncm_trains_through_ray_as_through_processes(tmp_path: Path) -> None:
     pytest.importorskip("ray", reason="Ray is the optional scale-out path: pip install 'mrexplore[ray]'")
     local = train(NCM_TINY, tmp_path / "procs", None, episodes=1, workers=2, seed=5)
