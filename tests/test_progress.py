@@ -190,6 +190,12 @@ def test_progress_lines_every_few_seconds_where_no_terminal() -> None:
         "bench: 2/10 episodes (20%), 5 s, about 20 s left",
         "bench: 10/10 episodes (100%), 8 s, all done",
     ]
+    clock.t = 200.0
+    budget = Progress(10, "train", "stages", None, stream=io.StringIO(), clock=clock)
+    budget.limit_s = 60.0  # the run stops within its budget whatever the stages would take
+    clock.t = 205.0
+    budget.set(1)
+    assert budget.stream.getvalue() == "train: 1/10 stages (10%), 5 s, about 55 s left\n"
     quiet = io.StringIO()
     q = Progress(10, "bench", "episodes", False, stream=quiet, clock=clock)
     clock.t = 100.0

@@ -67,6 +67,8 @@ class Progress:
         self._said = initial
         self._first = initial
         self.detail = ""
+        self.limit_s: float | None = None
+        """A time budget (seconds from the start): the time left said is never beyond it."""
 
     def update(self, n: float = 1) -> None:
         self.set(self.n + n)
@@ -87,7 +89,10 @@ class Progress:
         count = f"{pct:.0f}%" if self.unit == "%" else f"{self.n:g}/{self.total:g} {self.unit} ({pct:.0f}%)"
         text = f"{self.desc}: {count}, {_duration(elapsed)}"
         if done > 0 and self.n < self.total:
-            text += f", about {_duration(elapsed / done * (self.total - self.n))} left"
+            left = elapsed / done * (self.total - self.n)
+            if self.limit_s is not None:
+                left = max(0.0, min(left, self.limit_s - elapsed))
+            text += f", about {_duration(left)} left"
         if self.detail:
             text += f", {self.detail}"
         print(text, file=self.stream, flush=True)

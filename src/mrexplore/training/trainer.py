@@ -215,6 +215,7 @@ def train(
     t_start = time.perf_counter() - st.elapsed_s
     deadline = t_start + minutes * 60 if minutes is not None else math.inf
     bar = Progress(len(stages), "train", "stages", progress, initial=st.stage)
+    bar.limit_s = deadline - time.perf_counter() if minutes is not None else None
     with _Runner(workers, ray_address) as runner:
         ended = [0]
 
