@@ -192,10 +192,10 @@ def test_progress_lines_every_few_seconds_where_no_terminal() -> None:
     ]
     clock.t = 200.0
     budget = Progress(10, "train", "stages", None, stream=io.StringIO(), clock=clock)
-    budget.limit_s = 60.0  # the run stops within its budget whatever the stages would take
+    budget.limit_s = 30.0  # the run stops within its budget, whatever the stages would take (45 s)
     clock.t = 205.0
     budget.set(1)
-    assert budget.stream.getvalue() == "train: 1/10 stages (10%), 5 s, about 55 s left\n"
+    assert budget.stream.getvalue() == "train: 1/10 stages (10%), 5 s, about 25 s left\n"
     quiet = io.StringIO()
     q = Progress(10, "bench", "episodes", False, stream=quiet, clock=clock)
     clock.t = 100.0
