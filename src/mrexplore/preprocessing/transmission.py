@@ -178,6 +178,9 @@ class RobotSender:
         """The last message got no acknowledgement: the centre may hold it or not, so send the whole map."""
         self._changed: Box | None = None
         """Where the robot's :class:`OnBoardGrid` changed since the last acknowledged round (None: nowhere)."""
+        self._changed_since_sent: Box | None = None
+        """Where it changed since the last message was composed: what the centre lacks once it acknowledges
+        that message (a robot on ROS 2 keeps sensing between sending and the acknowledgement)."""
         self._full_len = 0
         """Bytes of the last whole map encoded (0: none yet): :class:`Outgoing` sends a delta of under half of
         it without encoding this round's whole map."""
@@ -207,6 +210,7 @@ class RobotSender:
         returned); :meth:`send_onboard` compares only where it changed since the last acknowledgement."""
         if box is not None:
             self._changed = box_union(self._changed, box)
+            self._changed_since_sent = box_union(self._changed_since_sent, box)
 
     def send_onboard(
         self, grid: OnBoardGrid, round_: int, position_rc: tuple[int, int], window: tuple[slice, slice]
@@ -235,6 +239,7 @@ class RobotSender:
         base) where the centre surely holds that base, and either is encoded when asked for."""
         base_held = self._acked_round != FULL and not self._unconfirmed
         self._unconfirmed = True  # until the centre acknowledges this round
+        self._changed_since_sent = None
         return Outgoing(self, full, delta() if base_held else None, self._full_len)
 
     def grid_delta_bytes(self, own: StateGrid, window: tuple[slice, slice]) -> int:
@@ -258,7 +263,10 @@ class RobotSender:
         np.put(self._acked, message.cells, message.codes)
         self._acked_round = message.round
         self._unconfirmed = False
-        self._changed = None  # the centre holds the grid as it is now
+        # The centre holds the grid as it was when this message was composed: what changed since is still
+        # to send. (Forgetting it lost those changes for good where sensing went on before the
+        # acknowledgement came, as on ROS 2: the centre's codes then had gaps its fill leaked through.)
+        self._changed = self._changed_since_sent
         if self._sent_grid is not None:
             window, ros = self._sent_grid
             self._acked_grid[window] = ros
