@@ -215,3 +215,19 @@ def test_a_mission_s_progress_line_says_coverage_and_step() -> None:
     p.detail = "step 40"
     p.set(45)
     assert out.getvalue() == "hier generated:0: 45%, 6 s, about 7 s left, step 40\n"
+
+
+def test_a_bar_ends_on_one_line_of_its_last_state() -> None:
+    """tqdm's close() prints the final state again: where output is no terminal that was a second line."""
+    import io
+
+    from mrexplore.progress import Progress
+
+    out = io.StringIO()
+    p = Progress(2, "bench", "episodes", True, stream=out)
+    p._bar.mininterval = 0  # every update prints, the last one included
+    p.update()
+    p.update()
+    p.close()
+    finals = [line for line in out.getvalue().replace("\r", "\n").splitlines() if "2/2" in line]
+    assert len(finals) == 1 and out.getvalue().endswith("\n")

@@ -103,7 +103,13 @@ class Progress:
     def close(self) -> None:
         """End the bar; where lines were printed, a last one with the final count (unless the last said it)."""
         if self._bar is not None:
-            self._bar.close()
+            bar = self._bar
+            if bar.leave and not bar.disable and bar.last_print_n == bar.n:
+                # tqdm's close() prints the last state again, a second line where output is no terminal
+                bar.fp.write("\n")
+                bar.fp.flush()
+                bar.disable = True
+            bar.close()
             self._bar = None
         elif self.mode == "lines" and self._lines and self.n != self._said:
             self._line()
