@@ -4,7 +4,7 @@ title and a step and coverage counter, above a legend and a scale bar; GIF and P
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -268,8 +268,8 @@ class GifRecorder:
         for i in range(sim.n_robots):
             self._trails[i].append(sim.positions_rc[i].copy())
         self._last = (sim, decision, goals_rc.copy(), status)
-        if sim.steps % self.every == 0:
-            self.frames.append(self._frame(self._gif_scale()))
+        if sim.steps % self.every == 0:  # kept palette-coded: a byte a pixel
+            self.frames.append(_coded(self._frame(self._gif_scale())))
             if len(self.frames) >= 2 * self.max_frames:
                 self.frames = self.frames[1::2]
                 self.every *= 2
@@ -315,20 +315,24 @@ class GifRecorder:
         if len(keep) > self.max_frames:
             picks = np.linspace(0, len(keep) - 1, self.max_frames).round().astype(int)
             keep = [keep[i] for i in picks]
-        last = self._frame(self._gif_scale())
+        last = _coded(self._frame(self._gif_scale()))
         frames = [f for f in keep if f.size == last.size] + [last]
-        palette = _gif_palette()
         bar = Progress(len(frames), "writing GIF", "frames", progress)
-        coded = []
-        for f in frames:
-            coded.append(f.quantize(palette=palette, dither=Image.Dither.NONE))
-            bar.update()
+
+        def rest() -> Iterator[Image.Image]:  # Pillow takes them one by one as it writes
+            for f in frames[1:]:
+                bar.update()
+                yield f
+
+        durations = [frame_ms] * (len(frames) - 1) + [2000]
+        _write(path, lambda p: frames[0].save(p, save_all=True, append_images=rest(), duration=durations, loop=0))
+        bar.update()
         bar.close()
-        durations = [frame_ms] * (len(coded) - 1) + [2000]
-        _write(
-            path,
-            lambda p: coded[0].save(p, save_all=True, append_images=coded[1:], duration=durations, loop=0),
-        )
+
+
+def _coded(frame: Image.Image) -> Image.Image:
+    """``frame`` in the GIF's one palette (no dithering: flat colours stay flat)."""
+    return frame.quantize(palette=_GIF_PALETTE, dither=Image.Dither.NONE)
 
 
 def _gif_palette() -> Image.Image:
@@ -343,6 +347,9 @@ def _gif_palette() -> Image.Image:
     pal = Image.new("P", (1, 1))
     pal.putpalette(flat + [0] * (768 - len(flat)))
     return pal
+
+
+_GIF_PALETTE = _gif_palette()
 
 
 def save_png(img: Image.Image, path: str | Path) -> None:
