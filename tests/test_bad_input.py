@@ -313,3 +313,19 @@ def test_a_bandwidth_bound_must_be_positive_and_leaves_old_benches_their_hash() 
     assert "bandwidth_max_m" not in _settings_dict(paper)["preprocess"]  # unbounded: hashed as before it existed
     assert _settings_dict(RunConfig())["preprocess"]["bandwidth_max_m"] == 6.0
     assert settings_hash(RunConfig()) != settings_hash(paper)
+
+
+def test_a_policy_archive_that_unpacks_beyond_the_limit_is_refused_unread(tmp_path) -> None:
+    """A small deflated archive can unpack to gigabytes: its members' sizes are read before any of them."""
+    import zipfile
+
+    from mrexplore.global_planning.learned.policy_file import MAX_POLICY_BYTES
+
+    bomb = tmp_path / "bomb.npz"
+    with zipfile.ZipFile(bomb, "w", compression=zipfile.ZIP_DEFLATED) as z:
+        z.writestr("__header__.npy", b"\0" * (MAX_POLICY_BYTES + 1))
+    assert bomb.stat().st_size < 1_000_000
+    assert _refused(bomb) == (
+        f"policy file {bomb} is not a mrexplore policy (it unpacks to {MAX_POLICY_BYTES + 1} bytes, over the "
+        f"{MAX_POLICY_BYTES}-byte limit); retrain it"
+    )

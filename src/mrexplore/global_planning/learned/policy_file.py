@@ -195,8 +195,11 @@ def _read_any(path: Path) -> tuple[dict[str, Any], State]:
     try:
         with zipfile.ZipFile(path) as z:
             names = z.namelist()
+            unpacked = sum(info.file_size for info in z.infolist())
     except (zipfile.BadZipFile, OSError):
         raise _not_policy(path, "not an archive") from None
+    if unpacked > MAX_POLICY_BYTES:  # a compressed member could unpack far beyond the file's own size
+        raise _not_policy(path, f"it unpacks to {unpacked} bytes, over the {MAX_POLICY_BYTES}-byte limit")
     if _HEADER + ".npy" in names:
         return _read_npz(path)
     if any(n.endswith("data.pkl") for n in names):
