@@ -190,23 +190,31 @@ def _torch_inference() -> bool:
     return value == "torch"
 
 
-def _hier(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
-    # The paper's three layers with the learned global layer (mGNN affinities, Hungarian decoding).
+def _loaded_policy(kind: str, policy: str | None) -> tuple[Any, dict[str, str]]:
+    """The network of a learned strategy's policy file (``kind`` hier or ncm; None: the shipped one), NumPy's
+    or torch's by :data:`INFERENCE_ENV`, and what a mission's record says of the file."""
     from pathlib import Path
 
-    from mrexplore.global_planning.learned.policy import LearnedPlanner
-    from mrexplore.global_planning.learned.policy_file import LoadedPolicy, load_policy_np
+    from mrexplore.global_planning.learned.policy_file import LoadedPolicy, load_ncm_policy_np, load_policy_np
 
     path = Path(policy) if policy else None
     loaded: LoadedPolicy[Any]
     if _torch_inference():
-        from mrexplore.global_planning.learned.checkpoint import load_policy
+        from mrexplore.global_planning.learned.checkpoint import load_ncm_policy, load_policy
 
-        loaded = load_policy(path)
+        loaded = load_policy(path) if kind == "hier" else load_ncm_policy(path)
     else:
-        loaded = load_policy_np(path)
+        loaded = load_policy_np(path) if kind == "hier" else load_ncm_policy_np(path)
     info = {"path": str(loaded.path), "sha256": loaded.sha256, "code_version": str(loaded.meta["code_version"])}
-    planner = LearnedPlanner(loaded.net, c.global_)
+    return loaded.net, info
+
+
+def _hier(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
+    # The paper's three layers with the learned global layer (mGNN affinities, Hungarian decoding).
+    from mrexplore.global_planning.learned.policy import LearnedPlanner
+
+    net, info = _loaded_policy("hier", policy)
+    planner = LearnedPlanner(net, c.global_)
     router = LocalRouter(c.local, c.preprocess)
     commitment = _commitment(c.global_, 1.0)
     return ExplorationPipeline("hier", planner, c.preprocess, router, commitment, policy=info, distances=c.global_)
@@ -216,21 +224,10 @@ def _ncm(name: str, sample: bool = False, match: bool = False) -> Factory:
     def make(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
         # NeuralCoMapping re-implemented: no hysteresis (it replans every robot every decision), no local
         # layer (each robot drives to its node).
-        from pathlib import Path
-
         from mrexplore.global_planning.learned.ncm_planner import NcmPlanner
-        from mrexplore.global_planning.learned.policy_file import LoadedPolicy, load_ncm_policy_np
 
-        path = Path(policy) if policy else None
-        loaded: LoadedPolicy[Any]
-        if _torch_inference():
-            from mrexplore.global_planning.learned.checkpoint import load_ncm_policy
-
-            loaded = load_ncm_policy(path)
-        else:
-            loaded = load_ncm_policy_np(path)
-        info = {"path": str(loaded.path), "sha256": loaded.sha256, "code_version": str(loaded.meta["code_version"])}
-        planner = NcmPlanner(loaded.net, sample=sample, name=name, match=match)
+        net, info = _loaded_policy("ncm", policy)
+        planner = NcmPlanner(net, sample=sample, name=name, match=match)
         return NcmPipeline(name, planner, c.preprocess, policy=info, distances=c.global_)
 
     return make
