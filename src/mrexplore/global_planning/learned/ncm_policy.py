@@ -1,21 +1,17 @@
 """NeuralCoMapping's action distribution: every robot draws its own target node from its row of the
 transport plan (independent categoricals; two robots may draw the same node), or takes the row's argmax
-for the deterministic variant. The joint log-probability is the sum of the robots' own."""
+for the deterministic variant (:mod:`~mrexplore.global_planning.learned.ncm_planner`, in NumPy). The joint
+log-probability is the sum of the robots' own."""
 
 from __future__ import annotations
 
-import numpy as np
 import torch
-
-from mrexplore.global_planning.hungarian import match_min_cost
 
 __all__ = [
     "robot_logits",
     "per_robot_log_prob",
     "per_robot_entropy",
     "per_robot_sample",
-    "per_robot_argmax",
-    "matched_targets",
 ]
 
 
@@ -51,25 +47,3 @@ def per_robot_sample(logits: torch.Tensor, generator: torch.Generator | None = N
     """``(m,) int64`` a node drawn for each robot from its own row."""
     probs = torch.softmax(logits, dim=1)
     return torch.multinomial(probs, 1, generator=generator)[:, 0]
-
-
-def per_robot_argmax(logits: torch.Tensor) -> torch.Tensor:
-    """``(m,) int64`` each robot's most likely node (the deterministic variant)."""
-    return logits.argmax(dim=1)
-
-
-def matched_targets(logits: torch.Tensor) -> torch.Tensor:
-    """``(m,) int64`` the joint choice of largest summed logit with every node used once before any is
-    shared (Hungarian, as ``hier`` decodes its affinities); a robot with no allowed node gets -1.
-
-    Per-robot argmax sends robots that stand together to the same node for ever, since their rows are
-    equal; this decoding of the same plan spreads them.
-
-    Examples
-    --------
-    >>> same = torch.tensor([[2.0, 1.0], [2.0, 1.0]])
-    >>> per_robot_argmax(same).tolist(), matched_targets(same).tolist()
-    ([0, 0], [0, 1])
-    """
-    cost = -logits.detach().double().numpy()
-    return torch.from_numpy(match_min_cost(np.where(np.isfinite(cost), cost, np.inf)))
