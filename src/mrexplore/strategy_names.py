@@ -21,7 +21,6 @@ def check_strategy_name(name: str) -> None:
     >>> check_strategy_name("hier-nolocal")
     >>> check_strategy_name("heir")
     Traceback (most recent call last):
-    ...
     mrexplore.types.MrExploreError: unknown strategy 'heir'; choose one of hier, hier-heuristic, nearest, ...
     """
     from mrexplore.types import MrExploreError

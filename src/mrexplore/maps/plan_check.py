@@ -43,7 +43,6 @@ def check_tones(gray: NDArray[np.uint8], name: str) -> None:
     >>> check_tones(np.array([[0, 255], [205, 254]], np.uint8), "plan")  # black, white, unknown
     >>> check_tones(np.full((4, 4), 128, np.uint8), "photo")
     Traceback (most recent call last):
-    ...
     mrexplore.types.MrExploreError: map photo is not a floor plan: 100% of its pixels are mid grey (a photograph?); ...
     """
     g = np.asarray(gray)
@@ -73,7 +72,6 @@ def check_plan(occupied: NDArray[np.bool_], resolution_m: float, name: str) -> N
     >>> specks = room.copy(); specks[6:34:3, 6:34:3] = True  # a speck every 0.3 m
     >>> check_plan(specks, 0.1, "specks")
     Traceback (most recent call last):
-    ...
     mrexplore.types.MrExploreError: map specks is not a floor plan: its walls are 101 scattered pieces (12.6 per m^2 ...
     """
     free = ~occupied
