@@ -24,7 +24,7 @@ Examples
 >>> planner = TeamPlanner(1, (12, 12), 0.1, strategy, silence_rounds=3, blacklist_radius_m=0.2)
 >>> state = np.full((12, 12), CellState.UNKNOWN, np.uint8); state[2:8, 2:8] = CellState.FREE
 >>> robot = RobotAgent(0, (12, 12), strategy.preprocess, SensorConfig()); robot.sense_state(state)
->>> planner.receive(decode_message(robot.compose(0, (4, 4), robot.window()).incremental()), 0)
+>>> planner.receive(planner.read(robot.compose(0, (4, 4), robot.window()).incremental()), 0)
 >>> planner.plan(0, now=0.0)  # the goal to send robot 0
 {0: array([2, 3], dtype=int32)}
 >>> planner.navigation(0, NavState.ABORTED, now=1.0)  # its navigation gave up on it
@@ -42,11 +42,10 @@ from numpy.typing import NDArray
 
 from mrexplore.pipeline import NO_GOAL, NO_ROUTE, Decision, DecisionInput, ExplorationPipeline
 from mrexplore.preprocessing.agents import TeamCentre
-from mrexplore.preprocessing.sparse_codec import decode as decode_message
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap
 from mrexplore.types import BoolGrid, CellState, MrExploreError
 
-__all__ = ["TeamPlanner", "NavState", "decode_message", "NO_ORACLE"]
+__all__ = ["TeamPlanner", "NavState", "NO_ORACLE"]
 
 NO_ORACLE = "the oracle needs the ground truth, which a real team lacks; pick another strategy"
 
@@ -121,6 +120,10 @@ class TeamPlanner:
     # -- messages in ------------------------------------------------------------------------------------
     def accepts(self, message: SparseFrontierMap) -> bool:
         return self.team.accepts(message)
+
+    def read(self, data: bytes) -> SparseFrontierMap | None:
+        """A message's bytes decoded (:meth:`TeamCentre.read`): None for a delta on a base the centre lacks."""
+        return self.team.read(data)
 
     def receive(self, message: SparseFrontierMap, round_: int) -> None:
         """Apply a message :meth:`accepts`, heard in ``round_``."""

@@ -7,11 +7,19 @@ import numpy as np
 
 from mrexplore.config import PreprocessConfig, SensorConfig
 from mrexplore.preprocessing.agents import RobotAgent, TeamCentre
-from mrexplore.preprocessing.sparse_codec import decode
+from mrexplore.preprocessing.sparse_codec import peek
+from mrexplore.preprocessing.sparse_map import SparseFrontierMap
 from mrexplore.types import CellState
 
 SHAPE = (8, 10)
 PP = PreprocessConfig(closing_size_cells=1)
+
+
+def read(centre: TeamCentre, data: bytes) -> SparseFrontierMap:
+    """The centre's reading of a message it can apply."""
+    message = centre.read(data)
+    assert message is not None
+    return message
 
 
 def _room(c1: int) -> np.ndarray:
@@ -23,13 +31,13 @@ def _room(c1: int) -> np.ndarray:
 def test_whole_map_then_deltas_then_a_restart_asks_for_the_whole_map_again() -> None:
     robot, centre = RobotAgent(0, SHAPE, PP, SensorConfig()), TeamCentre(1, SHAPE, 1, silence_rounds=3)
     robot.sense_state(_room(4))
-    first = decode(robot.compose(0, (3, 2), robot.window()).incremental())
+    first = read(centre, robot.compose(0, (3, 2), robot.window()).incremental())
     assert not first.is_delta and centre.accepts(first)
     centre.receive(first, 0)
     robot.acknowledged(first)
     assert (centre.state() == CellState.FREE).sum() == 12  # the 4 x 3 room
     robot.sense_state(_room(7))  # the room seen further east
-    second = decode(robot.compose(1, (3, 5), robot.window()).incremental())
+    second = read(centre, robot.compose(1, (3, 5), robot.window()).incremental())
     assert second.is_delta and second.base_round == 0 and centre.accepts(second)
     centre.receive(second, 1)
     robot.acknowledged(second)
@@ -37,10 +45,9 @@ def test_whole_map_then_deltas_then_a_restart_asks_for_the_whole_map_again() -> 
     centre.restart(2)  # the centre forgets: a delta has no base there any more
     robot.sense_state(_room(8))
     out = robot.compose(2, (3, 6), robot.window())
-    third = decode(out.incremental())
-    assert third.is_delta and not centre.accepts(third)
-    whole = decode(out.full_bytes())  # what the robot resends on the centre's request
-    assert centre.accepts(whole)
+    assert peek(out.incremental()).is_delta and centre.read(out.incremental()) is None
+    whole = centre.read(out.full_bytes())  # what the robot resends on the centre's request
+    assert whole is not None and centre.accepts(whole)
     centre.receive(whole, 2)
     assert (centre.state() == CellState.FREE).sum() == 28
 
@@ -48,7 +55,7 @@ def test_whole_map_then_deltas_then_a_restart_asks_for_the_whole_map_again() -> 
 def test_a_robot_is_assignable_while_heard_within_the_silence_limit() -> None:
     robot, centre = RobotAgent(1, SHAPE, PP, SensorConfig()), TeamCentre(2, SHAPE, 1, silence_rounds=2)
     robot.sense_state(_room(4))
-    centre.receive(decode(robot.compose(0, (3, 2), robot.window()).full_bytes()), 0)
+    centre.receive(read(centre, robot.compose(0, (3, 2), robot.window()).full_bytes()), 0)
     assert centre.status(0).heard.tolist() == [False, True]
     assert centre.status(0).assignable.tolist() == [False, True]  # robot 0: never heard, no known cell
     assert centre.status(1).assignable.tolist() == [False, True] and not centre.status(1).heard.any()
@@ -70,16 +77,16 @@ def test_what_the_robot_sensed_between_sending_and_the_acknowledgement_is_sent_n
     ended with the whole grid "known" at 91% coverage)."""
     robot, centre = RobotAgent(0, SHAPE, PP, SensorConfig()), TeamCentre(1, SHAPE, 1, silence_rounds=3)
     robot.sense_state(_room(4))
-    first = decode(robot.compose(0, (3, 2), robot.window()).incremental())
+    first = read(centre, robot.compose(0, (3, 2), robot.window()).incremental())
     centre.receive(first, 0)
     robot.acknowledged(first)
     robot.sense_state(_room(6))
-    second = decode(robot.compose(1, (3, 4), robot.window()).incremental())
+    second = read(centre, robot.compose(1, (3, 4), robot.window()).incremental())
     robot.sense_state(_room(8))  # seen while the second message is on its way
     centre.receive(second, 1)
     robot.acknowledged(second)
     assert (centre.state() == CellState.FREE).sum() == 20  # the 4 x 5 room of round 1
-    third = decode(robot.compose(2, (3, 6), robot.window()).incremental())
+    third = read(centre, robot.compose(2, (3, 6), robot.window()).incremental())
     assert third.is_delta and centre.accepts(third)
     centre.receive(third, 2)
     assert (centre.state() == CellState.FREE).sum() == 28  # the 4 x 7 room, as the robot knows it

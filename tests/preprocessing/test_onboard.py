@@ -11,7 +11,6 @@ from pytest import MonkeyPatch
 from mrexplore.config import SensorConfig
 from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
 from mrexplore.preprocessing.onboard import OnBoardGrid
-from mrexplore.preprocessing.sparse_codec import decode
 from mrexplore.preprocessing.sparse_map import component_seeds, neighbour_codes
 from mrexplore.preprocessing.transmission import RobotSender
 from mrexplore.sim.belief import Belief, classify
@@ -103,12 +102,14 @@ def test_onboard_messages_equal_those_of_the_whole_closed_grid(seed: int) -> Non
         r0, r1, c0, c1 = belief.box  # the robot stands where it has scanned
         pos = (int(rng.integers(r0, r1)), int(rng.integers(c0, c1)))
         own = classify(belief.log_odds, belief.observed, SENSOR)
-        expected = whole.send(close_unknown_holes(own, size), rnd, pos)
-        assert onboard.send_onboard(grid, rnd, pos, window).both() == expected
+        expected = whole.outgoing(close_unknown_holes(own, size), rnd, pos)
+        got = onboard.send_onboard(grid, rnd, pos, window)
+        assert got.both() == expected.both()
+        assert got.incremental_message() == expected.incremental_message()
         assert onboard.onboard_grid_delta_bytes(grid) == whole.grid_delta_bytes(own, everywhere)
         if rng.random() < 0.7:  # acknowledged
-            whole.acknowledged(decode(expected[1]))
-            onboard.acknowledged(decode(expected[1]))
+            whole.acknowledged(expected.incremental_message())
+            onboard.acknowledged(got.incremental_message())
 
 
 def test_state_version_moves_only_when_the_three_state_grid_changes() -> None:
@@ -137,7 +138,7 @@ def test_baseline_grid_bytes_are_the_known_box_as_ros_values(h: int, w: int, see
     import zlib
 
     from mrexplore.boxes import mask_box
-    from mrexplore.preprocessing.sparse_codec import HEADER
+    from mrexplore.preprocessing.sparse_codec import BASELINE_HEADER_BYTES
     from mrexplore.preprocessing.transmission import occupancy_grid_bytes
 
     rng = np.random.default_rng(seed)
@@ -146,10 +147,10 @@ def test_baseline_grid_bytes_are_the_known_box_as_ros_values(h: int, w: int, see
     window = grid[1:-1, 1:-1]
     box = mask_box(window != CellState.UNKNOWN)
     if box is None:
-        expected = (HEADER.size, HEADER.size)
+        expected = (BASELINE_HEADER_BYTES, BASELINE_HEADER_BYTES)
     else:
         ros = np.array([0, 100, -1], np.int8)[window[box[0] : box[1], box[2] : box[3]]].tobytes()
-        expected = (HEADER.size + len(ros), HEADER.size + len(zlib.compress(ros, 6)))
+        expected = (BASELINE_HEADER_BYTES + len(ros), BASELINE_HEADER_BYTES + len(zlib.compress(ros, 6)))
     assert occupancy_grid_bytes(window) == expected
 
 

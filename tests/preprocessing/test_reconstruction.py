@@ -244,13 +244,15 @@ def test_deltas_rebuild_what_full_maps_rebuild() -> None:
         seen[3, 2] = F
         full, incremental = sender.send(seen, rnd, (3, 2))
         full_centre.receive(decode(full))
-        delta_centre.receive(decode(incremental))
-        sender.acknowledged(decode(incremental))
+        message = delta_centre.read(incremental)
+        assert message is not None
+        delta_centre.receive(message)
+        sender.acknowledged(message)
         assert np.array_equal(full_centre.state(), delta_centre.state())
         assert len(incremental) <= len(full)
-        kinds.append(decode(incremental).is_delta)
+        kinds.append(message.is_delta)
     # The first map is whole; a round with nothing new costs a header and the seeds.
-    assert not kinds[0] and kinds[-1] and len(decode(incremental).cells) == 0
+    assert not kinds[0] and kinds[-1] and len(message.cells) == 0
 
 
 @settings(max_examples=100, deadline=None)
@@ -270,10 +272,10 @@ def test_a_window_sends_what_the_whole_grid_sends(seed: int) -> None:
         seen[r : r + h, c : c + w] = truth[r : r + h, c : c + w]
         seen[r, c] = F
         window = (slice(max(r - 2, 0), min(r + h + 2, shape[0])), slice(max(c - 2, 0), min(c + w + 2, shape[1])))
-        expected = whole.send(seen, rnd, (r, c))
-        assert windowed.send(seen[window], rnd, (r, c), window) == expected
-        whole.acknowledged(decode(expected[1]))
-        windowed.acknowledged(decode(expected[1]))
+        expected = whole.outgoing(seen, rnd, (r, c))
+        assert windowed.send(seen[window], rnd, (r, c), window) == expected.both()
+        whole.acknowledged(expected.incremental_message())
+        windowed.acknowledged(expected.incremental_message())
 
 
 def test_delta_on_the_wrong_base_is_refused() -> None:
@@ -369,7 +371,8 @@ def test_the_centre_kept_between_rounds_equals_the_centre_rebuilt_from_scratch(
             free = np.argwhere(grids[i] == F)
             pos = tuple(int(v) for v in free[rng.integers(len(free))]) if len(free) else (0, 0)
             full, delta = senders[i].send(grids[i], rnd, pos)  # type: ignore[arg-type]
-            message = decode(delta if rng.random() < 0.9 else full)
+            message = centre.read(delta if rng.random() < 0.9 else full)
+            assert message is not None  # every message is acknowledged: the centre holds each base
             centre.receive(message)
             senders[i].acknowledged(message)
         if rng.random() < 0.7:  # the centre is not asked every round: deltas pile up
@@ -467,7 +470,7 @@ def test_a_short_delta_is_sent_without_encoding_the_whole_map(monkeypatch: pytes
     import mrexplore.preprocessing.transmission as transmission
 
     encoded: list[bool] = []
-    monkeypatch.setattr(transmission, "encode", lambda m: encoded.append(m.is_delta) or encode(m))
+    monkeypatch.setattr(transmission, "encode", lambda m, base=None: encoded.append(m.is_delta) or encode(m, base))
     seen = np.full((40, 60), O, np.uint8)
     seen[1:-1, 1:-1] = np.where(np.random.default_rng(0).random((38, 58)) < 0.1, O, F)
     seen[1:-1, -1] = U
@@ -475,12 +478,12 @@ def test_a_short_delta_is_sent_without_encoding_the_whole_map(monkeypatch: pytes
     sender = RobotSender(0, seen.shape)
     first = sender.outgoing(seen, 0, (20, 30))
     assert first.delta is None and first.incremental() == first.full_bytes() and encoded == [False]
-    sender.acknowledged(decode(first.incremental()))
+    sender.acknowledged(first.incremental_message())
     seen[20, 31] = O
     encoded.clear()
     second = sender.outgoing(seen, 1, (20, 30))
-    delta = decode(second.incremental())
-    assert encoded == [True]
+    delta = decode(second.incremental(), first.full.code_grid())
+    assert encoded == [True] and delta == second.incremental_message() == second.delta
     assert delta.is_delta and delta.base_round == 0 and 2 * len(second.incremental()) < len(first.full_bytes())
     assert second.full_bytes() == encode(sparse_frontier_map(seen, 0, 1, (20, 30)))
     assert encoded == [True, False]
@@ -495,10 +498,10 @@ def test_a_long_delta_is_weighed_against_the_whole_map() -> None:
     one[3, 2] = F
     sender = RobotSender(0, full_map.shape)
     first = sender.outgoing(one, 0, (3, 2))
-    sender.acknowledged(decode(first.incremental()))
+    sender.acknowledged(first.incremental_message())
     out = sender.outgoing(full_map, 1, (3, 2))
     assert out.delta is not None and len(out.delta.cells) >= len(out.full.cells)
     full, incremental = out.both()
-    delta = encode(out.delta)
+    delta = encode(out.delta, first.full.code_grid())
     assert 2 * len(delta) >= len(first.full_bytes())
     assert incremental == (delta if len(delta) < len(full) else full)

@@ -27,7 +27,7 @@ def main() -> None:
     from mrexplore.config import PreprocessConfig, SensorConfig
     from mrexplore.maps.frame import GridFrame
     from mrexplore.preprocessing.agents import RobotAgent, TeamCentre
-    from mrexplore.preprocessing.sparse_codec import decode
+    from mrexplore.preprocessing.sparse_codec import decode, peek
     from mrexplore.ros2.messages import team_map_message
     from mrexplore.ros2.robot_node import ACK, WHOLE_MAP
     from mrexplore.types import CellState
@@ -94,22 +94,22 @@ def main() -> None:
             spin(0.3)
 
         kinds = []
-        first = decode(ask(0, room(4)))
-        kinds.append(("whole", not first.is_delta and centre.accepts(first)))
+        first = centre.read(ask(0, room(4)))
+        kinds.append(("whole", first is not None and not first.is_delta and centre.accepts(first)))
         centre.receive(first, 0)
         reply(0, ACK)
-        second = decode(ask(1, room(5)))  # one column more: the delta is shorter than the whole map
-        kinds.append(("delta", second.is_delta and centre.accepts(second)))
+        second = centre.read(ask(1, room(5)))  # one column more: the delta is shorter than the whole map
+        kinds.append(("delta", second is not None and second.is_delta and centre.accepts(second)))
         centre.receive(second, 1)
         reply(1, ACK)
         centre.restart(2)  # the centre forgets: the next delta has no base
-        third = decode(ask(2, room(6)))
-        kinds.append(("refused", third.is_delta and not centre.accepts(third)))
+        third = ask(2, room(6))
+        kinds.append(("refused", peek(third).is_delta and centre.read(third) is None))
         inbox.clear()
         reply(2, WHOLE_MAP)
         spin(1.0)
-        whole = decode(inbox.pop(0))
-        kinds.append(("resent", not whole.is_delta and centre.accepts(whole)))
+        whole = centre.read(inbox.pop(0))
+        kinds.append(("resent", whole is not None and not whole.is_delta and centre.accepts(whole)))
         centre.receive(whole, 2)
         reply(2, ACK)
         bad = team_map_message(room(8), TEAM, "map")
@@ -134,15 +134,15 @@ def main() -> None:
         lost.pose.pose.orientation.w = 1.0
         pose_pub.publish(lost)
         spin(0.5)
-        fourth = decode(ask(3, room(6)))  # the bad map and pose dropped: the robot still holds room(6)
-        kinds.append(("after_bad_map", fourth.is_delta and centre.accepts(fourth)))
+        fourth = centre.read(ask(3, room(6)))  # the bad map and pose dropped: the robot still holds room(6)
+        kinds.append(("after_bad_map", fourth is not None and fourth.is_delta and centre.accepts(fourth)))
         centre.receive(fourth, 3)
         result["steps"] = kinds
         # what the same robot and centre objects give in one process from room(6)
         agent = RobotAgent(0, (8, 10), PreprocessConfig(), SensorConfig())
         agent.sense_state(room(6))
         reference = TeamCentre(1, (8, 10), PreprocessConfig().closing_size_cells, silence_rounds=3)
-        reference.receive(decode(agent.compose(0, (3, 2), agent.window()).full_bytes()), 0)
+        reference.receive(decode(agent.compose(0, (3, 2), agent.window()).full_bytes()), 0)  # a whole map
         result["centre_equals_in_process"] = bool(np.array_equal(centre.state(), reference.state()))
         node.destroy_node()
         rclpy.shutdown()

@@ -31,7 +31,7 @@ def test_the_centre_node_plans_reads_nav2_and_survives_bad_messages() -> None:
     # Nav2 aborted the goal: another goal in the next round
     assert result["abort"] == {"new_goal": True, "rounds_after_abort": 1, "aborts": 1}
     assert result["warnings"] == [
-        "frontier message from robot1 dropped: bad frontier message: 23 bytes, shorter than the 54-byte header; "
+        "frontier message from robot1 dropped: bad frontier message: magic 0x07 is not 0x4d; "
         "drop it and ask the robot for a full map",
         result["warnings"][1],
         "goal on /robot1/goal_pose not sent by this centre (another node publishes there); "

@@ -28,11 +28,11 @@ class RobotAgent:
 
     Examples
     --------
-    >>> from mrexplore.preprocessing.sparse_codec import decode
     >>> robot = RobotAgent(0, (6, 6), PreprocessConfig(closing_size_cells=1), SensorConfig())
     >>> state = np.full((6, 6), CellState.UNKNOWN, np.uint8); state[1:4, 1:4] = CellState.FREE
     >>> robot.sense_state(state)
-    >>> message = decode(robot.compose(0, (2, 2), robot.window()).incremental())
+    >>> out = robot.compose(0, (2, 2), robot.window())
+    >>> message = out.incremental_message()  # what out.incremental() encodes
     >>> message.is_delta, message.position_rc, len(message.cells)
     (False, (2, 2), 8)
     """
@@ -81,9 +81,9 @@ class TeamCentre:
     """The centre's receiving end: the robots' maps merged into the team's grid, whom it heard in which
     round and where, and a restart that forgets it all.
 
-    A delta whose base the centre lacks is not applied (:meth:`accepts` says so); the transport then asks the
-    robot for its whole map. A robot is assignable while the centre heard it within ``silence_rounds``
-    rounds and knows its cell.
+    A delta whose base the centre lacks is not applied (:meth:`read` gives None, :meth:`accepts` says no);
+    the transport then asks the robot for its whole map. A robot is assignable while the centre heard it
+    within ``silence_rounds`` rounds and knows its cell.
     """
 
     def __init__(self, n_robots: int, shape: tuple[int, int], closing_size_cells: int, silence_rounds: int) -> None:
@@ -97,6 +97,12 @@ class TeamCentre:
     def accepts(self, message: SparseFrontierMap) -> bool:
         """Whether the centre can apply ``message`` (a whole map, or a delta on a base it holds)."""
         return self.map.accepts(message)
+
+    def read(self, data: bytes) -> SparseFrontierMap | None:
+        """Decode a message's bytes: a whole map, or a delta against the base the centre holds; None for a
+        delta on a base it lacks (the transport asks the robot for its whole map). Bad bytes raise
+        :class:`~mrexplore.preprocessing.sparse_codec.CodecError`."""
+        return self.map.read(data)
 
     def receive(self, message: SparseFrontierMap, round_: int) -> None:
         """Apply a message it accepts, heard in ``round_``."""

@@ -14,8 +14,6 @@ from mrexplore.config import PreprocessConfig, SensorConfig
 from mrexplore.preprocessing.agents import RobotAgent, TeamCentre
 from mrexplore.preprocessing.frontiers import closing_reach
 from mrexplore.preprocessing.reconstruction import CentreMap, free_iou
-from mrexplore.preprocessing.sparse_codec import decode
-from mrexplore.preprocessing.sparse_map import SparseFrontierMap
 from mrexplore.preprocessing.transmission import (
     LinkStatus,
     Outgoing,
@@ -104,31 +102,32 @@ class TeamLink:
     def _lost(self) -> bool:
         return self.message_loss > 0 and bool(self._rng.random() < self.message_loss)
 
-    def _send(self, data: bytes) -> SparseFrontierMap | None:
-        """One message over the link: decoded at the centre, or None when lost."""
+    def _send(self, data: bytes) -> bool:
+        """One message over the link: whether it arrived."""
         self.totals.messages_sent += 1
         if self._lost():
             self.totals.messages_lost += 1
             self.totals.bytes_lost += len(data)
-            return None
-        return decode(data)
+            return False
+        return True
 
     def _deliver(self, i: int, data: bytes, out: Outgoing) -> None:
         """Robot i's message ``data`` of this round, with the whole-map request and resend when the centre
         lacks the delta's base, and the acknowledgement back."""
-        received = self._send(data)
-        if received is None:
+        if not self._send(data):
             return
-        if not self.team.accepts(received):
+        received = self.team.read(data)
+        if received is None:
             if self._lost():  # the centre's request for the whole map
                 self.totals.acks_lost += 1
                 return
             full = out.full_bytes()
             self.totals.messages_resent += 1
             self.totals.bytes_resent += len(full)
-            received = self._send(full)
-            if received is None:
+            if not self._send(full):
                 return
+            received = self.team.read(full)
+            assert received is not None  # a whole map needs no base
         self.team.receive(received, self.totals.rounds)
         if self._lost():
             self.totals.acks_lost += 1

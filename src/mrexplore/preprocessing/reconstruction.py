@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from mrexplore.boxes import Box, box_union, grown_slices, mask_box
 from mrexplore.preprocessing.frontiers import Frontiers, close_unknown_holes, closing_reach, redetect_frontiers
 from mrexplore.preprocessing.scanline_fill import mark_coded_cells, refill_box, scanline_fill
+from mrexplore.preprocessing.sparse_codec import decode, peek
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap, apply_delta
 from mrexplore.types import BoolGrid, CellState, GridRC, MrExploreError, StateGrid
 
@@ -253,6 +254,23 @@ class CentreMap:
         centre holds for that robot (a delta on a base it lacks would corrupt the map)."""
         i = message.robot
         return not message.is_delta or (0 <= i < len(self._round) and self._round[i] == message.base_round)
+
+    def base_codes(self, robot: int, round_: int) -> NDArray[np.uint8] | None:
+        """``(H, W) uint8`` the code grid held for ``robot`` where the centre holds its round ``round_`` (the
+        base a delta of that round decodes against), else None. Read only."""
+        if 0 <= robot < len(self._round) and self._round[robot] == round_:
+            return self._codes[robot]
+        return None
+
+    def read(self, data: bytes) -> SparseFrontierMap | None:
+        """Decode a message's bytes: a whole map, or a delta against the codes held for its base round; None
+        for a delta on a base the centre lacks. Bad bytes raise
+        :class:`~mrexplore.preprocessing.sparse_codec.CodecError`."""
+        head = peek(data)
+        if not head.is_delta:
+            return decode(data)
+        base = self.base_codes(head.robot, head.base_round)
+        return None if base is None else decode(data, base)
 
     def receive(self, message: SparseFrontierMap) -> None:
         """Take one robot's message: a full map replaces its map, a delta updates the acknowledged one."""

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from mrexplore.boxes import Box, box_union
 from mrexplore.maps.occupancy_grid import OCCUPANCY_VALUES
 from mrexplore.preprocessing.onboard import OnBoardGrid
-from mrexplore.preprocessing.sparse_codec import HEADER, encode
+from mrexplore.preprocessing.sparse_codec import BASELINE_HEADER_BYTES, encode
 from mrexplore.preprocessing.sparse_map import (
     FULL,
     SparseFrontierMap,
@@ -98,38 +98,46 @@ def _ros_box(state: np.ndarray, lut: np.ndarray, unknown: int) -> np.ndarray:  #
 
 def occupancy_grid_bytes(state: StateGrid) -> tuple[int, int]:
     """Bytes of the baseline message of one grid: int8 cells (ROS: -1 unknown, 0 free, 100 occupied) over
-    the bounding box of known cells plus the same header as a frontier message; raw and zlib level 6.
+    the bounding box of known cells plus the fields every message needs (:data:`BASELINE_HEADER_BYTES`);
+    raw and zlib level 6.
 
     Examples
     --------
     >>> g = np.full((10, 10), CellState.UNKNOWN, np.uint8); g[2:4, 3:8] = CellState.FREE
     >>> raw, packed = occupancy_grid_bytes(g)
-    >>> raw - HEADER.size  # a 2 x 5 box
+    >>> raw - BASELINE_HEADER_BYTES  # a 2 x 5 box
     10
     """
     data = _ros_box(state, OCCUPANCY_VALUES, int(CellState.UNKNOWN))
     if len(data) == 0:
-        return HEADER.size, HEADER.size
-    return HEADER.size + len(data), HEADER.size + len(zlib.compress(data.data, 6))
+        return BASELINE_HEADER_BYTES, BASELINE_HEADER_BYTES
+    return BASELINE_HEADER_BYTES + len(data), BASELINE_HEADER_BYTES + len(zlib.compress(data.data, 6))
 
 
 class Outgoing:
     """One robot's messages of one round, each encoded only when asked for: the robot encodes the one it
     sends, and the byte accounting the other (what the other transmission mode would have sent).
 
-    The incremental message is the delta where it is shorter than the whole map, else the whole map. A
-    delta under half the bytes of the last whole map encoded is sent without encoding this round's (the
-    whole map of a robot that has seen much is tens of kB to deflate, a few ms a round, and changes
-    little from round to round); otherwise both are encoded and the shorter goes.
+    The incremental message is the delta where it is shorter than the whole map, else the whole map. The
+    delta is encoded when the round's messages are composed (against the acknowledged codes, which change
+    once the centre acknowledges). A delta under half the bytes of the last whole map encoded is sent
+    without encoding this round's (the whole map of a robot that has seen much covers a large box, and
+    changes little from round to round); otherwise both are encoded and the shorter goes.
     """
 
     def __init__(
-        self, sender: RobotSender, full: SparseFrontierMap, delta: SparseFrontierMap | None, last_full_len: int
+        self,
+        sender: RobotSender,
+        full: SparseFrontierMap,
+        delta: SparseFrontierMap | None,
+        delta_bytes: bytes | None,
+        last_full_len: int,
     ) -> None:
         self._sender = sender
         self.full = full
         self.delta = delta
         """None where the centre may not hold the delta's base: the incremental message is the whole map."""
+        self._delta_bytes = delta_bytes
         self._last_full_len = last_full_len
         self._full_bytes: bytes | None = None
         self._incremental: bytes | None = None
@@ -144,16 +152,20 @@ class Outgoing:
     def incremental(self) -> bytes:
         """The bytes sent in the default ``"delta"`` mode."""
         if self._incremental is None:
-            if self.delta is None:
+            delta = self._delta_bytes
+            if delta is None:
                 self._incremental = self.full_bytes()
+            elif len(delta) * 2 < self._last_full_len:
+                self._incremental = delta
             else:
-                delta = encode(self.delta)
-                if len(delta) * 2 < self._last_full_len:
-                    self._incremental = delta
-                else:
-                    full = self.full_bytes()
-                    self._incremental = delta if len(delta) < len(full) else full
+                full = self.full_bytes()
+                self._incremental = delta if len(delta) < len(full) else full
         return self._incremental
+
+    def incremental_message(self) -> SparseFrontierMap:
+        """The message :meth:`incremental` encodes (what the robot remembers as sent)."""
+        data = self.incremental()
+        return self.delta if self.delta is not None and data is self._delta_bytes else self.full
 
     def both(self) -> tuple[bytes, bytes]:
         """``(full, incremental)``, both encoded."""
@@ -240,13 +252,16 @@ class RobotSender:
         base_held = self._acked_round != FULL and not self._unconfirmed
         self._unconfirmed = True  # until the centre acknowledges this round
         self._changed_since_sent = None
-        return Outgoing(self, full, delta() if base_held else None, self._full_len)
+        if not base_held:
+            return Outgoing(self, full, None, None, self._full_len)
+        message = delta()
+        return Outgoing(self, full, message, encode(message, self._acked), self._full_len)
 
     def grid_delta_bytes(self, own: StateGrid, window: tuple[slice, slice]) -> int:
         """Bytes of the generic competitor of the sparse delta: the cells of the int8 occupancy grid that
         changed since the last acknowledged round, as gaps between their sorted indices (uint32) and their
-        values (int8), zlib level 6, plus the frontier message's header. ``own`` is the robot's grid in
-        ``window`` (every known cell lies inside it)."""
+        values (int8), zlib level 6, plus the fields every message needs (:data:`BASELINE_HEADER_BYTES`).
+        ``own`` is the robot's grid in ``window`` (every known cell lies inside it)."""
         ros = OCCUPANCY_VALUES[own]
         width = self._acked_grid.shape[1]
         local = np.flatnonzero(ros != self._acked_grid[window])
@@ -254,7 +269,7 @@ class RobotSender:
         cells = (rows + window[0].start) * width + cols + window[1].start
         gaps = np.diff(cells, prepend=0).astype(np.uint32)
         self._sent_grid = (window, ros)
-        return HEADER.size + len(zlib.compress(gaps.tobytes() + ros.ravel()[local].tobytes(), 6))
+        return BASELINE_HEADER_BYTES + len(zlib.compress(gaps.tobytes() + ros.ravel()[local].tobytes(), 6))
 
     def acknowledged(self, message: SparseFrontierMap) -> None:
         """The centre confirmed this round's message: later deltas apply to it."""

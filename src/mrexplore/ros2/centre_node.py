@@ -36,7 +36,7 @@ from mrexplore.centre import NavState, TeamPlanner
 from mrexplore.config import PreprocessConfig
 from mrexplore.maps.frame import GridFrame
 from mrexplore.pipeline import ExplorationPipeline
-from mrexplore.preprocessing.sparse_codec import decode
+from mrexplore.preprocessing.sparse_codec import peek
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap
 from mrexplore.ros2.deployment import Deployment
 from mrexplore.ros2.lockstep import DecisionReply, DecisionRequest
@@ -267,7 +267,7 @@ class CentreNode:
         name = self.robots[i].name
         try:
             data = bytes(deserialize_message(raw, self._UInt8MultiArray).data)
-            message = decode(data)
+            message = peek(data)
         except MrExploreError as exc:
             self._warn(f"frontier message from {name} dropped: {exc}")
             return
@@ -295,11 +295,16 @@ class CentreNode:
             wire.messages += 1
             wire.payload_bytes += len(data)
             wire.serialized_bytes += len(raw)
-        if not self.planner.accepts(message):
+        try:
+            decoded = self.planner.read(data)
+        except MrExploreError as exc:
+            self._warn(f"frontier message from {name} dropped: {exc}")
+            return
+        if decoded is None or not self.planner.accepts(decoded):
             r.asked_whole.add(i)
             self._replies[i].publish(self._UInt32MultiArray(data=[r.round, WHOLE_MAP]))
             return
-        r.inbox[i] = message
+        r.inbox[i] = decoded
         r.last_in = time.monotonic()
         self._replies[i].publish(self._UInt32MultiArray(data=[r.round, ACK]))
         if r.expected <= set(r.inbox):

@@ -30,7 +30,6 @@ from mrexplore.config import GridThresholds, PreprocessConfig, SensorConfig
 from mrexplore.maps.frame import GridFrame
 from mrexplore.maps.occupancy_grid import FrameOffset, state_in_team_frame, yaw_of
 from mrexplore.preprocessing.agents import RobotAgent
-from mrexplore.preprocessing.sparse_codec import decode
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap
 from mrexplore.preprocessing.transmission import Outgoing
 from mrexplore.ros2.deployment import POSE_TYPES, RobotEntry
@@ -184,7 +183,7 @@ class RobotNode:
             return
         out = self.agent.compose(round_, self.position_rc, self.agent.window())
         data = out.incremental()
-        self._sent, self._sent_bytes = (round_, out, decode(data)), data
+        self._sent, self._sent_bytes = (round_, out, out.incremental_message()), data
         self._out.publish(bytes_message(data))
 
     def _on_reply(self, msg: Any) -> None:
@@ -197,7 +196,7 @@ class RobotNode:
             self.agent.acknowledged(message)
         elif values[1] == WHOLE_MAP:
             data = out.full_bytes()
-            self._sent, self._sent_bytes = (round_, out, decode(data)), data
+            self._sent, self._sent_bytes = (round_, out, out.full), data
             self._out.publish(bytes_message(data))
         else:
             self._warn(f"reply dropped: kind {values[1]} is neither {ACK} (ack) nor {WHOLE_MAP} (whole map)")
