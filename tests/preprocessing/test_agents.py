@@ -4,12 +4,13 @@ through the protocol's whole maps, deltas, acknowledgements and a restart."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from mrexplore.config import PreprocessConfig, SensorConfig
 from mrexplore.preprocessing.agents import RobotAgent, TeamCentre
 from mrexplore.preprocessing.sparse_codec import peek
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap
-from mrexplore.types import CellState
+from mrexplore.types import CellState, MrExploreError
 
 SHAPE = (8, 10)
 PP = PreprocessConfig(closing_size_cells=1)
@@ -91,3 +92,16 @@ def test_what_the_robot_sensed_between_sending_and_the_acknowledgement_is_sent_n
     centre.receive(third, 2)
     assert (centre.state() == CellState.FREE).sum() == 28  # the 4 x 7 room, as the robot knows it
     assert np.array_equal(centre.state(), robot.grid.closed)
+
+
+def test_a_whole_map_for_another_grid_is_refused_before_decoding() -> None:
+    robot, centre = RobotAgent(0, (9, 10), PP, SensorConfig()), TeamCentre(1, SHAPE, 1, silence_rounds=3)
+    state = np.full((9, 10), CellState.UNKNOWN, np.uint8)
+    state[2:6, 1:4] = CellState.FREE
+    robot.sense_state(state)
+    with pytest.raises(MrExploreError) as err:
+        centre.read(robot.compose(0, (3, 2), robot.window()).full_bytes())
+    assert str(err.value) == (
+        "message from robot 0 for a (9, 10) grid does not fit this centre (1 robots, grid (8, 10)); "
+        "check the robot id and map"
+    )

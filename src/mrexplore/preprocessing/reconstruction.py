@@ -268,6 +268,11 @@ class CentreMap:
         :class:`~mrexplore.preprocessing.sparse_codec.CodecError`."""
         head = peek(data)
         if not head.is_delta:
+            if head.shape != self.shape:  # checked before decoding: the box's arrays follow the grid's size
+                raise MrExploreError(
+                    f"message from robot {head.robot} for a {head.shape} grid does not fit this centre "
+                    f"({len(self._codes)} robots, grid {self.shape}); check the robot id and map"
+                )
             return decode(data)
         base = self.base_codes(head.robot, head.base_round)
         return None if base is None else decode(data, base)

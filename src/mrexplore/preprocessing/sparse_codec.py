@@ -8,8 +8,10 @@ both ends hold. Each cell is one decision "boundary or not"; a boundary cell the
 4 neighbours, "free or not" and "occupied or unknown". The contexts are what the decoder already knows
 there: the cell's base code, the neighbours decoded so far, and what their codes say of the cell and of
 its neighbours (a boundary cell's code states each neighbour's state, so most of a frontier's codes
-follow from the cells before it). Each context starts from a prior learned on training maps
-(``codec_prior.npy``, made by ``benchmarks/codec_prior.py``) and adapts to the message.
+follow from the cells before it). Stretches of cells that nothing decoded or acknowledged borders are
+coded as runs (as in JPEG-LS), so that the coding's work follows the boundary more than the box's area.
+Each context starts from a prior learned on training maps (``codec_prior.npy``, made by
+``benchmarks/codec_prior.py``) and adapts to the message.
 
 Layout::
 
@@ -66,6 +68,8 @@ __all__ = [
     "N_CONTEXTS",
     "PRIOR_SHA256",
     "context_counts",
+    "prior",
+    "prior_sha256",
 ]
 
 MAGIC = 0x4D  # "M"
