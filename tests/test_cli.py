@@ -55,8 +55,9 @@ def test_json_run_prints_exactly_one_object(capsys) -> None:
 def test_no_baseline_bytes_leaves_the_grid_fields_out(capsys) -> None:
     assert main(["explore", *FAST, "--json", "--no-baseline-bytes"]) == 0
     rec = json.loads(capsys.readouterr().out)
-    assert rec["config"]["mission"]["baseline_bytes"] is False and rec["bytes_sparse"] > 0
+    assert rec["config"]["mission"]["baseline_bytes"] is False and rec["bytes_sparse_delta"] > 0
     assert (rec["bytes_grid"], rec["bytes_grid_zlib"], rec["bytes_grid_delta_zlib"]) == (None, None, None)
+    assert rec["bytes_sparse"] is None  # the whole maps the other mode would have sent
     assert main(["explore", *FAST, "--no-baseline-bytes"]) == 0
     assert "; grid not counted, zlib not counted; " in capsys.readouterr().out
 

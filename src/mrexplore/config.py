@@ -561,8 +561,10 @@ class MissionConfig(_Checked):
     baseline_bytes: bool = True
     """Count what Table II's int8-grid baselines would have sent (``bytes_grid``, ``bytes_grid_zlib``,
     ``bytes_grid_delta_zlib``): every robot's known box and its changed cells, zlib-compressed every round,
-    work neither a robot nor the centre does. False leaves those fields empty, for runs that want Table I
-    alone: the missions are the same step for step, and the sparse maps' bytes are counted either way."""
+    work neither a robot nor the centre does, and what the other ``transmission`` mode would have sent (the
+    whole map, coded every round, is several ms on a large floor). False leaves those fields empty, for runs
+    that want Table I alone: the missions are the same step for step, and the bytes of the messages sent
+    are counted either way."""
     oscillation_radius_m: float = 2.0
     """A new goal within this distance of a goal the robot gave up before reaching it (still a frontier)
     is a return to it, metres."""

@@ -154,7 +154,8 @@ def bytes_table(rows: list[Row]) -> str:
     against the raw grid, the sparse delta against its generic competitor (the grid's changed cells since
     the last acknowledged round, zlib), and the centre map's free-space IoU (lowest round, mean over
     rounds). '–' where a group's rows lack the grids: written before the delta was counted, or by a run
-    that left the grid baselines out (``--no-baseline-bytes``)."""
+    that left the baselines out (``--no-baseline-bytes``: the grids and the other transmission mode's
+    sparse maps)."""
     lines = [
         "| scene | episodes | grid kB | grid zlib kB | grid delta zlib kB | sparse kB | sparse delta kB | "
         "sparse vs grid | delta vs grid | delta vs zlib | delta vs grid delta zlib | IoU min | IoU mean |",
@@ -168,18 +169,18 @@ def bytes_table(rows: list[Row]) -> str:
     def kb_text(v: float | None) -> str:
         return "–" if v is None else f"{v:.1f}"
 
-    def versus(part: float, whole: float | None) -> str:
-        return "–" if whole is None else _reduction(part, whole)
+    def versus(part: float | None, whole: float | None) -> str:
+        return "–" if whole is None or part is None else _reduction(part, whole)
 
     for dataset, cls in _groups(rows):
         sel = [r for r in rows if r["dataset"] == dataset and r["size_class"] == cls]
-        sparse, delta = (float(np.mean([float(r[k]) for r in sel])) / 1e3 for k in _SPARSE)
+        sparse, delta = (mean_kb(sel, k) for k in _SPARSE)
         grid, grid_zlib, grid_delta = (mean_kb(sel, k) for k in GRID_BASELINE_FIELDS)
         iou_min = min(float(r["reconstruction_iou_min"]) for r in sel)
         iou_mean = np.mean([float(r["reconstruction_iou_mean"]) for r in sel])
         lines.append(
             f"| {dataset} {cls} | {len(sel)} | {kb_text(grid)} | {kb_text(grid_zlib)} | {kb_text(grid_delta)} | "
-            f"{sparse:.1f} | {delta:.1f} | {versus(sparse, grid)} | {versus(delta, grid)} | "
+            f"{kb_text(sparse)} | {kb_text(delta)} | {versus(sparse, grid)} | {versus(delta, grid)} | "
             f"{versus(delta, grid_zlib)} | {versus(delta, grid_delta)} | {iou_min:.4f} | {iou_mean:.5f} |"
         )
     return "\n".join(lines)

@@ -71,7 +71,7 @@ class TeamLink:
         self._rng = rng if rng is not None else np.random.default_rng(0)
         self.team = TeamCentre(n_robots, shape, preprocess.closing_size_cells, silence_rounds)
         """The centre's receiving end."""
-        self.totals = TransmissionTotals(grids_counted=count_grids)
+        self.totals = TransmissionTotals(grids_counted=count_grids, mode=mode)
         self.robots = [RobotAgent(i, shape, preprocess, sensor) for i in range(n_robots)]
         """Each robot's on-board work: its grid kept up to date where its scans fell, its messages."""
         self.status = LinkStatus(np.zeros(n_robots, bool), np.ones(n_robots, bool), self.team.positions_rc.copy())
@@ -180,11 +180,19 @@ class TeamLink:
             self._deliver(i, data, out)
         t0 = time.perf_counter()
         # What the other transmission mode would have sent, and the baseline grids, encoded on the threads
-        # (zlib and the box's pass let go of the GIL): on a KTH floor the grids were a fifth of a whole
-        # mission's time on one thread.
-        for full_bytes, incremental in map_threads(Outgoing.both, sent):
-            self.totals.bytes_sparse += len(full_bytes)
-            self.totals.bytes_sparse_delta += len(incremental)
+        # (zlib, the codec and the box's pass let go of the GIL): on a KTH floor the grids were a fifth of a
+        # whole mission's time on one thread. Without the baselines, only what was sent is counted: the
+        # whole map of a large floor is several ms to code, every round.
+        if self.totals.grids_counted:
+            for full_bytes, incremental in map_threads(Outgoing.both, sent):
+                self.totals.bytes_sparse += len(full_bytes)
+                self.totals.bytes_sparse_delta += len(incremental)
+        else:
+            for out in sent:
+                if self.mode == "delta":
+                    self.totals.bytes_sparse_delta += len(out.incremental())
+                else:
+                    self.totals.bytes_sparse += len(out.full_bytes())
         sizes = map_threads(lambda job: occupancy_grid_bytes(job[2]), to_count)
         for (i, key, _), counts in zip(to_count, sizes, strict=True):
             self._grid_bytes[i] = key, counts

@@ -309,17 +309,20 @@ class TransmissionTotals:
     centre_restarts: int = 0
     iou: list[float] = field(default_factory=list)
     grids_counted: bool = True
-    """The int8-grid baselines were counted (:data:`GRID_BASELINE_FIELDS`); False: they were not, and the
-    record leaves them empty."""
+    """The int8-grid baselines (:data:`GRID_BASELINE_FIELDS`) and the other transmission mode's sparse
+    bytes were counted; False: they were not, and the record leaves them empty."""
+    mode: TransmissionMode = "delta"
+    """The mode the messages were sent in (its sparse bytes are counted either way)."""
 
     def as_measures(self) -> dict[str, float | int | None]:
         """Flat fields for an episode record."""
         iou = np.asarray(self.iou) if self.iou else np.ones(1)
         counts: dict[str, float | int | None] = {
-            k: v for k, v in asdict(self).items() if k not in ("iou", "grids_counted")
+            k: v for k, v in asdict(self).items() if k not in ("iou", "grids_counted", "mode")
         }
         if not self.grids_counted:
             counts.update(dict.fromkeys(GRID_BASELINE_FIELDS))
+            counts["bytes_sparse" if self.mode == "delta" else "bytes_sparse_delta"] = None
         return {
             **counts,
             "reconstruction_iou_min": round(float(iou.min()), 6),

@@ -93,10 +93,12 @@ class EpisodeMeasures:
     next two)."""
     bytes_grid_zlib: int | None = 0
     """The same grids zlib-compressed (level 6)."""
-    bytes_sparse: int = 0
-    """Bytes of the sparse frontier maps (paper IV-A), whole every round."""
-    bytes_sparse_delta: int = 0
-    """Bytes of the incremental sparse maps (changes since the last acknowledged round)."""
+    bytes_sparse: int | None = 0
+    """Bytes of the sparse frontier maps (paper IV-A), whole every round (None for a mission that sent deltas
+    and did not count the baselines)."""
+    bytes_sparse_delta: int | None = 0
+    """Bytes of the incremental sparse maps (changes since the last acknowledged round; None for a mission
+    that sent whole maps and did not count the baselines)."""
     bytes_grid_delta_zlib: int | None = 0
     """The generic competitor of the sparse delta: the int8 grid's cells changed since the last
     acknowledged round (index gaps and values), zlib-compressed."""
