@@ -21,6 +21,7 @@ __all__ = [
     "encode_bit",
     "decode_bit",
     "finish",
+    "bytes_read",
     "COUNT_LIMIT",
     "PROB_ONE",
 ]
@@ -64,6 +65,18 @@ def _split(state: np.ndarray, p: int) -> int:  # pragma: no cover - numba
 
 
 @nb.njit(cache=True, inline="always")
+def _settled(state: np.ndarray) -> bool:  # pragma: no cover - numba
+    """Whether both bounds share their top byte."""
+    return ((state[_X1] ^ state[_X2]) & 0xFF000000) == 0
+
+
+@nb.njit(cache=True, inline="always")
+def _shift_bounds(state: np.ndarray) -> None:  # pragma: no cover - numba
+    state[_X1] = (state[_X1] << 8) & _MASK
+    state[_X2] = ((state[_X2] << 8) & _MASK) | 0xFF
+
+
+@nb.njit(cache=True, inline="always")
 def encode_bit(
     state: np.ndarray, out: np.ndarray, counts: np.ndarray, ctx: int, bit: int
 ) -> None:  # pragma: no cover - numba
@@ -74,11 +87,10 @@ def encode_bit(
     else:
         state[_X1] = mid + 1
     update(counts, ctx, bit)
-    while ((state[_X1] ^ state[_X2]) & 0xFF000000) == 0:
+    while _settled(state):  # the top byte is decided: out with it
         out[state[_POS]] = state[_X2] >> 24
         state[_POS] += 1
-        state[_X1] = (state[_X1] << 8) & _MASK
-        state[_X2] = ((state[_X2] << 8) & _MASK) | 0xFF
+        _shift_bounds(state)
 
 
 @nb.njit(cache=True)
@@ -114,9 +126,8 @@ def decode_bit(state: np.ndarray, data: np.ndarray, counts: np.ndarray, ctx: int
     else:
         state[_X1] = mid + 1
     update(counts, ctx, bit)
-    while ((state[_X1] ^ state[_X2]) & 0xFF000000) == 0:
-        state[_X1] = (state[_X1] << 8) & _MASK
-        state[_X2] = ((state[_X2] << 8) & _MASK) | 0xFF
+    while _settled(state):  # the encoder wrote this top byte: shift the next one in
+        _shift_bounds(state)
         pos = state[_POS]
         state[_X] = ((state[_X] << 8) & _MASK) | (int(data[pos]) if pos < len(data) else 0)
         state[_POS] = pos + 1

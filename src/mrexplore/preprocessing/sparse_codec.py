@@ -435,12 +435,14 @@ def _zigzag(v: int) -> int:
 
 
 class _Reader:
+    """The header's varints, read from ``pos`` up to ``end``, each checked."""
+
     def __init__(self, data: bytes, end: int, pos: int) -> None:
         self.data, self.end, self.pos = data, end, pos
 
     def varint(self, what: str) -> int:
-        value = shift = 0
-        for k in range(_MAX_VARINT_BYTES):
+        value = 0
+        for shift in range(0, 7 * _MAX_VARINT_BYTES, 7):
             if self.pos >= self.end:
                 raise _fail(f"truncated before the end of {what}")
             b = self.data[self.pos]
@@ -448,8 +450,6 @@ class _Reader:
             value |= (b & 0x7F) << shift
             if b < 0x80:
                 return value
-            shift += 7
-            del k
         raise _fail(f"{what}: a varint longer than {_MAX_VARINT_BYTES} bytes")
 
     def signed(self, what: str) -> int:
