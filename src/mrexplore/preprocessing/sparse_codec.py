@@ -108,7 +108,6 @@ PRIOR_SHA256 = "2b3ac5731beff0920a83b90efdcde75c3e1d47d212e54c0941190c3ee0c645b3
 """Digest of the shipped prior table: a changed table is a new wire format (bump :data:`VERSION`)."""
 _DR = np.array([-1, 1, 0, 0], dtype=np.int64)
 _DC = np.array([0, 0, -1, 1], dtype=np.int64)
-_OPP = np.array([1, 0, 3, 2], dtype=np.int64)
 
 
 class CodecError(MrExploreError):
