@@ -15,8 +15,10 @@ from hypothesis import strategies as st
 from mrexplore.preprocessing.sparse_codec import (
     MAX_CELLS,
     MAX_ROUND,
+    N_CONTEXTS,
     PRIOR_SHA256,
     CodecError,
+    context_counts,
     decode,
     encode,
     peek,
@@ -239,3 +241,15 @@ def test_forged_headers_give_exact_errors(data: bytes, problem: str) -> None:
 def test_the_shipped_prior_is_the_one_this_format_names() -> None:
     # A changed table decodes other messages: it must come with a new format version.
     assert prior_sha256() == PRIOR_SHA256
+
+
+def test_context_counts_are_the_decisions_of_a_message() -> None:
+    # A 3 x 3 room walled in: 8 boundary cells, the corners with 2 walls beside them, the sides with 1. Each
+    # wall is one "occupied or unknown" decision that says occupied: 4 x 2 + 4 x 1 = 12 of them, no unknown.
+    g = np.full((5, 5), CellState.OCCUPIED, np.uint8)
+    g[1:4, 1:4] = CellState.FREE
+    counts = context_counts(sparse_frontier_map(g, 0, 0, (2, 2)))
+    assert counts.shape == (N_CONTEXTS, 2)
+    boundary, direction = 6 * 2 * 2**6, 4 * 6 * 4 * 4 * 4 * 2  # the model's blocks, as the codec lays them out
+    occupied_or_unknown = counts[boundary + direction : boundary + 2 * direction]
+    assert occupied_or_unknown.sum(axis=0).tolist() == [0, 12]
