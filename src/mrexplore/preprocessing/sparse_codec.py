@@ -193,7 +193,7 @@ def _bit_length(v: int) -> int:  # pragma: no cover - numba
 
 @nb.njit(cache=True, inline="always")
 def _block(quiet: np.ndarray, c: int) -> None:  # pragma: no cover - numba
-    if 0 <= c < len(quiet) - 1:
+    if 0 <= c < len(quiet):
         quiet[c] = False
 
 
@@ -220,17 +220,17 @@ def _code_box(
     Cells whose boundary decision would see nothing (no code around them decoded, none in the base: the
     inside of rooms and the unknown, most of a whole map's box) are coded as runs, as JPEG-LS's run mode
     does: per stretch of such cells in a row, whether all are non-boundary, else where the first boundary
-    cell lies (Exp-Golomb, adaptive). The work is then the boundary cells and the stretches, not the area.
+    cell lies (Exp-Golomb, adaptive). Most of the work is then the boundary cells, not the box's area.
 
     Returns the encoder's bytes (mode 0), and the stream length (mode 0), the bytes the decoder read (mode
     1; -1: a boundary cell decoded without a code, -2: a run beyond its stretch)."""
     rows, cols = P.shape[0] - 2 * _PAD, P.shape[1] - 2 * _PAD
     out = np.empty(1024 if mode == 0 else 0, dtype=np.uint8)
     st = new_decoder(stream) if mode == 1 else new_encoder()
-    # quiet[c]: cell c of the row is in run mode once the cells left of it are empty (the last entry, a
-    # sentinel, is never quiet). Found from the codes around: the row above's (the columns of its
-    # boundary cells, gathered as it was coded), the base's, and beyond the box's right and lower edges.
-    quiet = np.zeros(cols + 1, dtype=np.bool_)
+    # quiet[c]: cell c of the row is in run mode once the cells left of it are empty. Found from the codes
+    # around: the row above's (the columns of its boundary cells, gathered as it was coded), the base's,
+    # and beyond the box's right and lower edges.
+    quiet = np.zeros(cols, dtype=np.bool_)
     above = np.empty(cols + 2 * _PAD, dtype=np.int64)
     n_above = 0
     for pc in range(cols + 2 * _PAD):  # the row above the box lies beyond it
@@ -244,7 +244,7 @@ def _code_box(
             grown = np.empty(2 * len(out) + 64 * cols + 64, dtype=np.uint8)
             grown[: len(out)] = out
             out = grown
-        quiet[:cols] = True
+        quiet[:] = True
         for k in range(n_above):
             for c in range(above[k] - _PAD - 1, above[k] - _PAD + 2):
                 _block(quiet, c)
@@ -414,8 +414,8 @@ def context_counts(message: SparseFrontierMap, base: NDArray[np.uint8] | None = 
     """``(N_CONTEXTS, 2) int64`` how often each context saw a 0 and a 1 in ``message`` (against ``base``
     for a delta): the statistics the prior table is learned from."""
     counts = np.zeros((N_CONTEXTS, 2), dtype=np.int64)
-    box, base_grid, new = _box_and_codes(message, base)
-    _coded(2, base_grid, message.shape, box, new, counts, np.zeros(0, np.uint8))
+    box, new = _box_and_codes(message, base)
+    _coded(2, base, message.shape, box, new, counts, np.zeros(0, np.uint8))
     return counts
 
 
@@ -525,12 +525,13 @@ def peek(data: bytes) -> MessageHead:
 
 def _box_and_codes(
     message: SparseFrontierMap, base: NDArray[np.uint8] | None
-) -> tuple[tuple[int, int, int, int], NDArray[np.uint8] | None, NDArray[np.uint8]]:
-    """The box of the listed cells, the base (None for a whole map), and the new codes in the box."""
+) -> tuple[tuple[int, int, int, int], NDArray[np.uint8]]:
+    """The box of the listed cells and the new codes in it (the base's there, changed as listed; None: a
+    whole map, an empty grid)."""
     H, W = message.shape
     cells = np.asarray(message.cells, dtype=np.int64)
     if len(cells) == 0:
-        return (0, 0, 0, 0), base, np.zeros((0, 0), dtype=np.uint8)
+        return (0, 0, 0, 0), np.zeros((0, 0), dtype=np.uint8)
     rr, cc = np.divmod(cells, W)
     box = (int(rr.min()), int(rr.max()) + 1, int(cc.min()), int(cc.max()) + 1)
     new = (
@@ -539,7 +540,7 @@ def _box_and_codes(
         else base[box[0] : box[1], box[2] : box[3]].copy()
     )
     new[rr - box[0], cc - box[2]] = message.codes
-    return box, base, new
+    return box, new
 
 
 def encode(message: SparseFrontierMap, base: NDArray[np.uint8] | None = None) -> bytes:
@@ -580,7 +581,7 @@ def encode(message: SparseFrontierMap, base: NDArray[np.uint8] | None = None) ->
         if len(codes) and not codes.all():
             raise MrExploreError("cannot encode a whole map that lists a cell with code 0")
         base_grid = None
-    box, base_grid, new = _box_and_codes(message, base_grid)
+    box, new = _box_and_codes(message, base_grid)
     _, out, n = _coded(0, base_grid, message.shape, box, new, prior().astype(np.int32), np.zeros(0, np.uint8))
     head = bytearray((MAGIC, VERSION << 1 | (_KIND_DELTA if message.is_delta else _KIND_FULL)))
     _put(head, message.robot)

@@ -300,7 +300,7 @@ class CentreNode:
         except MrExploreError as exc:
             self._warn(f"frontier message from {name} dropped: {exc}")
             return
-        if decoded is None or not self.planner.accepts(decoded):
+        if decoded is None:  # a delta on a base this centre lacks
             r.asked_whole.add(i)
             self._replies[i].publish(self._UInt32MultiArray(data=[r.round, WHOLE_MAP]))
             return
