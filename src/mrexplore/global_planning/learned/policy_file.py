@@ -7,13 +7,11 @@ A policy in torch's archive format, as older versions wrote them, is still read 
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 import math
-import subprocess
 import zipfile
-from collections.abc import Callable, Mapping
-from importlib import metadata, resources
+from collections.abc import Callable
+from importlib import resources
 from pathlib import Path
 from typing import Any, Generic, TypeVar
 
@@ -24,6 +22,10 @@ from mrexplore.config import LearnedConfig, config_from_dict
 from mrexplore.global_planning.learned.ncm_inputs import NcmConfig
 from mrexplore.global_planning.learned.numpy_nets import GraphNetNp, NcmNetNp
 from mrexplore.types import MrExploreError
+from mrexplore.weights_archive import HEADER_MEMBER as _HEADER
+from mrexplore.weights_archive import WEIGHT_PREFIX as _WEIGHT
+from mrexplore.weights_archive import code_version, file_sha256, weights_digest
+from mrexplore.weights_archive import write_weights_archive as write_policy_file
 
 __all__ = [
     "LoadedPolicy",
@@ -50,9 +52,6 @@ HIER_FORMAT = "mrexplore-policy-1"
 NCM_FORMAT = "mrexplore-ncm-policy-1"
 KINDS = {HIER_FORMAT: "hier", NCM_FORMAT: "ncm"}
 """Format tag of a policy file -> the strategy it drives."""
-_HEADER = "__header__"
-_WEIGHT = "w:"
-"""Prefix of a weight's name inside the archive (the header is the one other member)."""
 
 VALUE_INPUTS = 4
 """Privileged scalars of the critic: remaining explorable area (m^2 / 100), coverage, steps / 1000, robots / 10."""
@@ -71,50 +70,6 @@ def default_ncm_policy_path() -> Path:
     return Path(str(resources.files("mrexplore.global_planning.learned") / "pretrained" / "ncm.npz"))
 
 
-def file_sha256(path: Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
-def code_version() -> str:
-    """The package version, with the git commit where the source is a checkout."""
-    try:
-        version = metadata.version("mrexplore")
-    except metadata.PackageNotFoundError:
-        version = "unknown"
-    try:
-        sha = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"],
-            cwd=Path(__file__).parent,
-            capture_output=True,
-            text=True,
-            timeout=5,
-            check=False,
-        ).stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        sha = ""
-    return f"{version}+{sha}" if sha else version
-
-
-def weights_digest(state: Mapping[str, Any]) -> str:
-    """sha256 over the weights (names, shapes and float32 bytes, in name order): a file whose weights were
-    changed after saving no longer matches. Arrays or torch tensors; both give the same digest.
-
-    Examples
-    --------
-    >>> weights_digest({"b": np.zeros(2), "a": np.ones((1, 1))}) == weights_digest({"a": [[1.0]], "b": [0.0, 0.0]})
-    True
-    """
-    h = hashlib.sha256()
-    for name in sorted(state):
-        v = state[name]
-        if hasattr(v, "detach"):  # a torch tensor
-            v = v.detach().float().contiguous().cpu().numpy()
-        a = np.array(v, dtype=np.float32, order="C")  # ascontiguousarray would make a 0-d array 1-d
-        h.update(f"{name}{tuple(a.shape)}".encode())
-        h.update(a.tobytes())
-    return h.hexdigest()
-
-
 class PolicyFile:
     """A policy file's checked content: its header (format, network config, code version, meta) and its
     float32 weights by name, with the path and the file's sha256."""
@@ -127,33 +82,6 @@ class PolicyFile:
         """What loading reports: the code version, the trainer's meta and the network config."""
         config_key = "ncm_config" if self.header["format"] == NCM_FORMAT else "learned_config"
         return {k: self.header.get(k) for k in ("code_version", "meta", config_key)}
-
-
-def write_policy_file(path: Path, header: Mapping[str, Any], state: Mapping[str, Any]) -> None:
-    """Write ``state`` (arrays or tensors, stored as float32) under ``header`` (plain JSON data, with a
-    ``format`` tag), adding the weights digest and the code version (where ``header`` has none); atomic (a
-    kill never leaves half a file)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    arrays = {}
-    for k, v in state.items():
-        if hasattr(v, "detach"):
-            v = v.detach().float().contiguous().cpu().numpy()
-        arrays[_WEIGHT + k] = np.array(v, dtype=np.float32, order="C")
-    full = {"code_version": code_version(), "meta": {}, **header, "weights_sha256": weights_digest(state)}
-    text = json.dumps(full, sort_keys=True, allow_nan=False, default=_plain)
-    tmp = path.with_name(path.name + ".tmp")
-    with tmp.open("wb") as f:
-        payload: dict[str, Any] = {_HEADER: np.frombuffer(text.encode(), np.uint8), **arrays}
-        np.savez(f, **payload)
-    tmp.replace(path)
-
-
-def _plain(value: Any) -> Any:
-    """JSON form of NumPy scalars and arrays in a header."""
-    if isinstance(value, np.generic | np.ndarray):
-        return value.tolist()
-    raise TypeError(f"{type(value).__name__} is not plain data")
 
 
 def read_policy_file(path: Path | None, fmt: str) -> PolicyFile:
