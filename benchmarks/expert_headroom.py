@@ -2,7 +2,7 @@
 the same maps, seeds and starts (paired), per dataset.
 
 Run: python benchmarks/expert_headroom.py [--maps 6] [--robots 3] [--seeds 1] [--workers 2]
-         [--datasets houseexpo,dungeon] [--world truth|known]
+         [--datasets houseexpo,dungeon] [--world truth|known|predicted] [--predictor FILE]
 It picks the first ``--maps`` maps by name of each dev dataset (HouseExpo PNGs, DungeonMaps) at 0.1 m. The
 expert may use the simulator (training only): at each decision it runs its candidates (the heuristic's,
 nearest's and noisy utility assignments) forward over the training horizon and takes the best return.
@@ -11,6 +11,10 @@ nearest's and noisy utility assignments) forward over the training horizon and t
 the team knows at the decision, every cell it has not observed a wall, and each is scored by the steps
 until no frontier is left (the horizon where that takes longer); ties go to the heuristic's own choice.
 Such an expert sees nothing a robot team could not, so what it gains a planner could gain at run time.
+
+``--world predicted`` runs the candidates forward in the world the map predictor completes (the shipped one,
+or ``--predictor FILE``): seen cells as they are, unseen ones a wall where the prediction says so; each is
+scored by eq. 9's return over the horizon, the area term counting the cells newly seen in that world.
 """
 
 from __future__ import annotations
@@ -30,14 +34,21 @@ from mrexplore.global_planning.protocol import Assignment
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import make_strategy
-from mrexplore.training.expert import candidate_assignments, known_world_returns, lookahead_returns
+from mrexplore.prediction.network import load_predictor
+from mrexplore.training.expert import (
+    candidate_assignments,
+    known_world_returns,
+    lookahead_returns,
+    predicted_world_returns,
+)
 
 MAPS = maps_dir()
 
 
-def episode(args: tuple[str, int, int, bool, str]) -> int:
+def episode(args: tuple[str, int, int, bool, str, str | None]) -> int:
     """Steps of one episode, the expert deciding (True) or hier-heuristic alone (False)."""
-    path, robots, seed, expert, world = args
+    path, robots, seed, expert, world, predictor_file = args
+    predictor = load_predictor(predictor_file) if world == "predicted" else None
     cfg = TrainConfig()
     truth = load_map(path, MapConfig(resolution_m=cfg.resolution_m))
     pipeline = make_strategy("hier-heuristic")
@@ -55,7 +66,11 @@ def episode(args: tuple[str, int, int, bool, str]) -> int:
             heuristic = GlobalPlanningConfig()
             cands = candidate_assignments(problem, own, heuristic, cfg.noisy_candidates, cfg.noise_m, rng)
             if len(cands) > 1:
-                returns = lookahead(m, cands, cfg.horizon_steps, pipeline.planner)
+                if predictor is not None:
+                    p_free = predictor.p_free(problem.state, problem.resolution_m)
+                    returns = predicted_world_returns(m, cands, cfg.horizon_steps, pipeline.planner, p_free)
+                else:
+                    returns = lookahead(m, cands, cfg.horizon_steps, pipeline.planner)
                 own = Assignment(cands[int(np.argmax(returns))])
         m.commit(own)
     return m.steps
@@ -68,7 +83,10 @@ def main() -> int:
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--datasets", default="houseexpo,dungeon", help="comma-separated: houseexpo, dungeon")
-    ap.add_argument("--world", choices=("truth", "known"), default="truth", help="where candidates run forward")
+    ap.add_argument(
+        "--world", choices=("truth", "known", "predicted"), default="truth", help="where candidates run forward"
+    )
+    ap.add_argument("--predictor", default=None, help="predictor file of --world predicted (default: the shipped one)")
     args = ap.parse_args()
     if not MAPS.is_dir():
         print(f"skipped: dev maps not found at {MAPS}", file=sys.stderr)
@@ -82,7 +100,7 @@ def main() -> int:
     with ProcessPoolExecutor(args.workers, mp_context=ctx) as pool:
         for name, paths in sets.items():
             runs = [(str(p), s) for p in paths for s in range(args.seeds)]
-            jobs = [(path, args.robots, s, e, args.world) for path, s in runs for e in (False, True)]
+            jobs = [(path, args.robots, s, e, args.world, args.predictor) for path, s in runs for e in (False, True)]
             steps = list(pool.map(episode, jobs))
             base, exp = steps[0::2], steps[1::2]
             est, lo, hi = paired_bootstrap(exp, base)

@@ -98,7 +98,8 @@ def test_given_starts(capsys) -> None:
         (
             ["--strategy", "greedy"],
             "mrexplore: error: unknown strategy 'greedy'; choose one of "
-            "hier, hier-heuristic, nearest, utility, coscan, ncm, ncm-sampled, ncm-matched, oracle",
+            "hier, hier-heuristic, hier-predict-heuristic, nearest, utility, coscan, ncm, ncm-sampled, "
+            "ncm-matched, oracle",
         ),
         (
             ["--start", "0.01,0.01"],
@@ -298,3 +299,32 @@ def test_a_first_run_says_it_compiles(monkeypatch, tmp_path, capsys) -> None:
     assert capsys.readouterr().err == "mrexplore: compiling kernels, first run only (about a minute)\n"
     monkeypatch.undo()
     assert not kernel_cache.say_if_compiling() and capsys.readouterr().err == ""
+
+
+def test_the_predictive_strategy_runs_with_a_trained_predictor_or_none(tmp_path, capsys) -> None:
+    """``train --predictor`` writes a predictor that explore runs and names (path, sha256) in ``--json``;
+    ``--predictor none`` runs without one; bad predictor input is one line."""
+    cfg = tmp_path / "tiny.yaml"
+    cfg.write_text(
+        "predictor:\n  missions: 2\n  val_missions: 1\n  moments: 1\n  max_steps: 100\n  resolution_m: 0.2\n"
+        "  width: 2\n  crop_cells: 16\n  batch: 2\n  epochs: 1\n  steps_per_epoch: 1\n"
+    )
+    out = tmp_path / "pred"
+    args = ["train", "--predictor", "--out", str(out), "--config", str(cfg), "--workers", "1", "--no-progress"]
+    assert main([*args, "--train-maps", str(tmp_path / "no-maps")]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.startswith("kept epoch 1 (validation loss ") and line.endswith(f"{out / 'log.csv'}")
+    run = ["explore", *FAST, "--strategy", "hier-predict-heuristic", "--json", "--max-steps", "60"]
+    assert main([*run, "--predictor", str(out / "predictor.npz")]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    assert rec["strategy"] == "hier-predict-heuristic" and rec["predictor"]["path"] == str(out / "predictor.npz")
+    assert len(rec["predictor"]["sha256"]) == 64
+    assert main([*run, "--predictor", "none"]) == 0
+    assert json.loads(capsys.readouterr().out)["predictor"] == {"path": "none", "sha256": ""}
+    assert main([*run, "--predictor", str(tmp_path / "missing.npz")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("mrexplore: error: predictor file") and "not found" in err and err.count("\n") == 1
+    assert main(["train", "--predictor", "--strategy", "ncm", "--out", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err == (
+        "mrexplore: error: --strategy does not apply to --predictor (it trains on collected beliefs); drop it\n"
+    )

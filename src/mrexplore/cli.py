@@ -56,6 +56,12 @@ POLICY_HELP = (
     "weights of the learned strategies (hier, ncm), written by 'mrexplore train': FILE, or KIND=FILE pairs "
     "(hier=A.npz,ncm=B.npz) where a run has both (default: the shipped policies)"
 )
+TRAIN_PREDICTOR = "\0train"
+"""``train --predictor`` given alone: train the map predictor."""
+PREDICTOR_HELP = (
+    "map predictor of the predictive strategies (hier-predict-heuristic): FILE written by 'mrexplore train "
+    "--predictor', or none (every unknown cell free); default: the shipped one"
+)
 MIN_REPLAN_HELP = (
     "steps a robot whose goal was seen drives on before the team replans "
     f"(default {MissionConfig.min_replan_steps}; 1: at once)"
@@ -181,6 +187,7 @@ def _add_mission_flags(ex: argparse.ArgumentParser) -> None:
     )
     ex.add_argument("--commitment", type=float, default=None, help=COMMITMENT_HELP)
     ex.add_argument("--policy", default=None, help=POLICY_HELP)
+    ex.add_argument("--predictor", default=None, help=PREDICTOR_HELP)
     ex.add_argument("--seed", type=_SEED, default=0, help="seed of starts, sensor noise and faults (default 0)")
     ex.add_argument("--max-steps", type=_COUNT, default=None, help=f"step budget (default {MissionConfig.max_steps})")
     ex.add_argument("--min-replan-steps", type=_COUNT, default=None, help=MIN_REPLAN_HELP)
@@ -246,6 +253,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     be.add_argument("--commitment", type=float, default=None, help=COMMITMENT_HELP)
     be.add_argument("--policy", default=None, help=POLICY_HELP)
+    be.add_argument("--predictor", default=None, help=PREDICTOR_HELP)
     be.add_argument(
         "--resolution", type=_POSITIVE, default=None, help=f"cell size, metres (default {MapConfig.resolution_m})"
     )
@@ -264,6 +272,17 @@ def build_parser() -> argparse.ArgumentParser:
         help=TRAIN_METHOD,
     )
     tr.add_argument("--out", required=True, help="folder for policy.npz, checkpoints, log.csv and stages.csv")
+    tr.add_argument(
+        "--predictor",
+        nargs="?",
+        const=TRAIN_PREDICTOR,
+        default=None,
+        metavar="FILE|none",
+        help="alone: train the map predictor instead (predictor.npz, beliefs.npz, checkpoints, log.csv, "
+        "curve.png) from beliefs of missions on the training maps, the truth as the label (reads the predictor "
+        "and sim sections); with FILE or none: the map predictor of a policy that reads the predicted gain "
+        "(train.learned.use_predicted_gain; default: the shipped one)",
+    )
     tr.add_argument(
         "--strategy",
         choices=TRAINABLE,
@@ -368,6 +387,7 @@ def _add_ros2(sub: Any) -> None:
         help=f"one of {', '.join(BUILTIN_STRATEGIES)} but oracle (default {DEFAULT_STRATEGY})",
     )
     ce.add_argument("--policy", default=None, help=POLICY_HELP)
+    ce.add_argument("--predictor", default=None, help=PREDICTOR_HELP)
     ce.add_argument(
         "--no-local", action="store_true", help="turn the local routing layer off: robots go to cluster centres"
     )
@@ -686,7 +706,7 @@ def _bench(args: argparse.Namespace, argv: Sequence[str]) -> str:
 
     maps = expand_maps(args.maps)
     specs = [
-        EpisodeSpec(m, s, n, seed, run, args.policy)
+        EpisodeSpec(m, s, n, seed, run, args.policy, args.predictor)
         for m in maps
         for s in strategies
         for n in robots
@@ -715,6 +735,13 @@ def _need_torch() -> None:
 
 def _train(args: argparse.Namespace) -> str:
     run = _run_config(args)
+    if args.predictor == TRAIN_PREDICTOR:
+        return _train_predictor(args, run)
+    if args.predictor is not None and not (run.train.strategy == "hier" and run.train.learned.use_predicted_gain):
+        raise MrExploreError(
+            f"--predictor {args.predictor} is for a hier policy that reads the predicted gain; set "
+            "train.learned.use_predicted_gain: true in --config, or give --predictor alone to train a predictor"
+        )
     if args.strategy is not None:
         run = replace(run, train=replace(run.train, strategy=args.strategy))
     if args.minutes is not None and not (math.isfinite(args.minutes) and args.minutes > 0):
@@ -740,6 +767,7 @@ def _train(args: argparse.Namespace) -> str:
         say=lambda s: print(s, file=sys.stderr),
         sim=run.sim,
         mission=run.mission,
+        predictor=args.predictor,
     )
     best = next(r for r in result.stages if r["stage"] == result.best_stage)
     sampled = f", sampled {best['val_sampled_steps_mean']:.1f}" if best.get("val_sampled_steps_mean") else ""
@@ -751,6 +779,34 @@ def _train(args: argparse.Namespace) -> str:
             f"{sampled}): the policy is the untrained start ({start}); train longer; {wrote}"
         )
     return f"kept stage {result.best_stage} (validation {best['val_steps_mean']:.1f} steps{sampled}); {wrote}"
+
+
+def _train_predictor(args: argparse.Namespace, run: RunConfig) -> str:
+    if args.strategy is not None or args.episodes is not None:
+        flag = "--strategy" if args.strategy is not None else "--episodes"
+        raise MrExploreError(f"{flag} does not apply to --predictor (it trains on collected beliefs); drop it")
+    if args.minutes is not None and not (math.isfinite(args.minutes) and args.minutes > 0):
+        raise MrExploreError(f"--minutes must be > 0, got {args.minutes}")
+    _check_output(args.out, "--out", folder=True)
+    _need_torch()
+    say_if_compiling()
+    from mrexplore.training.predictor import train_predictor
+
+    path, best = train_predictor(
+        run.predictor,
+        Path(args.out),
+        _train_maps(args.train_maps),
+        minutes=args.minutes,
+        workers=args.workers,
+        ray_address=args.ray_address,
+        resume=args.resume,
+        seed=args.seed,
+        progress=args.progress,
+        say=lambda s: print(s, file=sys.stderr),
+        sim=run.sim,
+    )
+    log = path.parent / "log.csv"
+    return f"kept epoch {best['epoch']} (validation loss {best['val_loss']:.4f}); wrote {path} and {log}"
 
 
 def _strategy(args: argparse.Namespace, run: RunConfig) -> Any:
@@ -765,6 +821,7 @@ def _strategy(args: argparse.Namespace, run: RunConfig) -> Any:
         local=not args.no_local,
         policy=args.policy,
         coscan_cfg=run.coscan,
+        predictor=getattr(args, "predictor", None),
     )
 
 
@@ -840,6 +897,7 @@ def _mission_record(
         **measures,
         "starts_xy": [list(truth.frame.rc_to_xy((int(r), int(c)))) for r, c in starts_rc],
         "policy": strategy.policy,
+        "predictor": strategy.predictor,
         "config": {
             **config_to_dict(replace(run, train=TrainConfig())),
             "strategy": {

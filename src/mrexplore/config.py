@@ -386,6 +386,13 @@ class GlobalPlanningConfig(_Checked):
     """explore_lite's potential_scale: cost per metre of geodesic distance."""
     size_weight: float = 1.0
     """explore_lite's gain_scale: reward per metre of frontier (members x resolution)."""
+    gain_weight: float = 0.25
+    """``hier-predict-heuristic``: reward per m^2 of the new free area a scan from a cluster's centre is
+    predicted to see (on top of explore_lite's cost; chosen on the validation maps of training). Negative:
+    a cost, which sends robots first to the frontiers that are predicted to close soon."""
+    gain_range_m: float = 6.0
+    """``hier-predict-heuristic``: range of the scan its predicted gain is cast with, metres (the sensor's
+    default range)."""
     commitment: float | None = None
     """Goal hysteresis at re-decisions: the cluster holding a robot's current goal is offered to it at this
     fraction of the distance to that goal, and a robot that keeps the cluster keeps its goal and route; 1: none
@@ -414,6 +421,8 @@ class GlobalPlanningConfig(_Checked):
     _constraints = {
         "distance_weight": _non_negative(),
         "size_weight": _non_negative(),
+        "gain_weight": Interval(-100, 100),
+        "gain_range_m": _positive("metres"),
         "commitment": Interval(0, 1, none="the strategy's default"),
         "far_above_cells": _non_negative(),
         "exact_radius_m": _positive("metres"),
@@ -611,6 +620,11 @@ class LearnedConfig(_Checked):
     use_isolation: bool = True
     """Edge feature: distance from cluster k to its nearest other cluster centre (straight line: a
     geodesic per centre costs more than the rest of a decision on large maps)."""
+    use_predicted_gain: bool = False
+    """Edge feature (a sixth, for a policy trained with it): the new free area a scan from cluster k's centre
+    is predicted to see on the map predictor's completion of the belief, m^2 / ``gain_scale_m2``."""
+    gain_scale_m2: float = 10.0
+    """The predicted gain is divided by this before entering the network, m^2."""
 
     _constraints = {
         "hidden": Interval(4, 1024),
@@ -618,6 +632,7 @@ class LearnedConfig(_Checked):
         "distance_scale_m": _positive("metres"),
         "size_scale_m": _positive("metres"),
         "base_scale": _positive(),
+        "gain_scale_m2": _positive(),
     }
 
 
@@ -831,6 +846,86 @@ class TrainConfig(_Checked):
 
 
 @dataclass(frozen=True)
+class PredictorTrainConfig(_Checked):
+    """The learned map predictor and its training (``mrexplore train --predictor``): the team's belief taken
+    at random decisions of missions on the training maps (never the dev maps), the ground truth as the label;
+    the loss and the scores count the unknown cells near a frontier."""
+
+    cell_m: float = 0.2
+    """Side of the predictor's cells, metres: the belief is pooled onto them (0.1 m planning cells two by
+    two) and the prediction repeated back onto the planning cells."""
+    width: int = 8
+    """Channels of the U-Net's finest level (doubled at each of its two coarser levels)."""
+    resolution_m: float = 0.1
+    """Cell size of the collection missions, metres."""
+    collector: str = "hier-heuristic"
+    """Strategy of the collection missions (whose beliefs the predictor learns to complete)."""
+    missions: int = 480
+    """Training missions collected, each on a training DungeonMap or a procedural plan."""
+    val_missions: int = 48
+    """Validation missions: half on held-out training DungeonMaps, half on held-out procedural plans."""
+    moments: int = 4
+    """Beliefs kept per mission, drawn at random among its decisions within the coverage range."""
+    min_coverage: float = 0.1
+    """Beliefs are drawn from decisions with at least this coverage."""
+    max_coverage: float = 0.9
+    """... and at most this coverage."""
+    robots_min: int = 1
+    """Fewest robots of a collection mission."""
+    robots_max: int = 5
+    """Most robots of a collection mission."""
+    max_steps: int = 1500
+    """Step budget of a collection mission."""
+    generated_share: float = 0.5
+    """Share of collection missions on procedural floor plans (the rest on training DungeonMaps)."""
+    plans: str = "varied"
+    """Procedural floor plans of collection and validation (see :class:`TrainConfig`)."""
+    band_m: float = 6.0
+    """The loss and the validation scores count the unknown cells within this distance of a frontier."""
+    crop_cells: int = 64
+    """Side of a training crop, predictor cells (a multiple of 4), around a random cell of the band."""
+    batch: int = 32
+    """Crops per gradient step."""
+    epochs: int = 60
+    """Epochs at most (the minutes budget may stop it first); the epoch of least validation loss is kept."""
+    steps_per_epoch: int = 200
+    """Gradient steps per epoch, each on fresh random crops."""
+    lr: float = 2e-3
+    """Adam learning rate."""
+    weight_decay: float = 1e-5
+    """Adam weight decay."""
+
+    _constraints = {
+        "cell_m": _positive("metres"),
+        "width": Interval(1, 256),
+        "resolution_m": _positive("metres"),
+        "collector": OneOf(("hier-heuristic", "utility", "nearest")),
+        "missions": _at_least(1),
+        "val_missions": _at_least(1),
+        "moments": _at_least(1),
+        "min_coverage": Interval(0, 1),
+        "max_coverage": Interval("min_coverage", 1),
+        "robots_min": _at_least(1),
+        "robots_max": _at_least("robots_min"),
+        "max_steps": _at_least(1),
+        "generated_share": Interval(0, 1),
+        "plans": OneOf(("varied", "generated")),
+        "band_m": _positive("metres"),
+        "crop_cells": _at_least(8),
+        "batch": _at_least(1),
+        "epochs": _at_least(1),
+        "steps_per_epoch": _at_least(1),
+        "lr": _positive(),
+        "weight_decay": _non_negative(),
+    }
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.crop_cells % 4:
+            raise MrExploreError(f"predictor.crop_cells must be a multiple of 4, got {self.crop_cells}")
+
+
+@dataclass(frozen=True)
 class RunConfig(_Checked):
     """Every setting of a run, one section per part: the YAML file that ``--config`` reads on explore,
     bench and train (``mrexplore config`` prints the defaults). A section or field left out keeps its
@@ -846,6 +941,8 @@ class RunConfig(_Checked):
     train: TrainConfig = field(default_factory=TrainConfig)
     """Training only (``mrexplore train``), which also reads ``sim`` and ``mission`` (its faults and
     replanning; the step budget is ``train.max_steps``)."""
+    predictor: PredictorTrainConfig = field(default_factory=PredictorTrainConfig)
+    """The map predictor's training only (``mrexplore train --predictor``), which also reads ``sim``."""
 
 
 def config_from_dict(cls: type[Any], data: dict[str, Any], where: str = "") -> Any:

@@ -5,7 +5,8 @@ from __future__ import annotations
 __all__ = ["BUILTIN_STRATEGIES", "TABLE_I", "check_strategy_name"]
 
 BUILTIN_STRATEGIES = (
-    "hier", "hier-heuristic", "nearest", "utility", "coscan", "ncm", "ncm-sampled", "ncm-matched", "oracle",
+    "hier", "hier-heuristic", "hier-predict-heuristic", "nearest", "utility", "coscan", "ncm", "ncm-sampled",
+    "ncm-matched", "oracle",
 )  # fmt: skip
 """In the order :mod:`mrexplore.pipeline.registry` registers them (a test holds the two together)."""
 TABLE_I = ("hier", "hier-heuristic", "utility", "coscan", "nearest", "ncm", "oracle")
@@ -21,7 +22,7 @@ def check_strategy_name(name: str) -> None:
     >>> check_strategy_name("hier-nolocal")
     >>> check_strategy_name("heir")
     Traceback (most recent call last):
-    mrexplore.types.MrExploreError: unknown strategy 'heir'; choose one of hier, hier-heuristic, nearest, ...
+    mrexplore.types.MrExploreError: unknown strategy 'heir'; choose one of hier, ...
     """
     from mrexplore.types import MrExploreError
 

@@ -177,7 +177,8 @@ def test_bench_refuses_unknown_strategy(tmp_path, capsys) -> None:
     assert main(["bench", "--maps", "generated:2", "--strategies", "coscan2", "--out", str(tmp_path)]) == 2
     assert (
         capsys.readouterr().err == "mrexplore: error: unknown strategy 'coscan2'; choose one of "
-        "hier, hier-heuristic, nearest, utility, coscan, ncm, ncm-sampled, ncm-matched, oracle\n"
+        "hier, hier-heuristic, hier-predict-heuristic, nearest, utility, coscan, ncm, ncm-sampled, "
+        "ncm-matched, oracle\n"
     )
 
 
@@ -219,6 +220,11 @@ def test_the_resume_key_holds_the_resolved_map_and_the_settings(tmp_path, monkey
     faulty = RunConfig(map=FAST["run"].map, mission=MissionConfig(max_steps=3000, faults=FaultConfig(message_loss=0.1)))
     assert EpisodeSpec("m.png", "nearest", 2, 0, run=faulty).settings != a.settings
     assert EpisodeSpec("m.png", "hier", 2, 0, **FAST).policy_sha256 != "" and a.policy_sha256 == ""
+    # a predictive strategy's key holds its predictor: the file's sha256, or 'none'
+    none = EpisodeSpec("m.png", "hier-predict-heuristic", 2, 0, **FAST, predictor="none")
+    shipped = EpisodeSpec("m.png", "hier-predict-heuristic", 2, 0, **FAST)
+    assert none.policy_sha256 == "none" and len(shipped.policy_sha256) == 64 and none.key != shipped.key
+    assert "+" not in EpisodeSpec("m.png", "hier", 2, 0, **FAST, predictor="none").policy_sha256  # reads none
 
 
 def test_a_bench_without_the_grid_baselines_keeps_its_own_key_and_leaves_them_empty(tmp_path) -> None:

@@ -274,3 +274,21 @@ def test_ncm_rewards_sum_to_its_area_formula() -> None:
     area_m2 = (m.sim.known_cells - first[0]) * 0.2**2
     assert m.steps == out["steps"]
     assert rewards.sum() == pytest.approx(5e-3 * (area_m2 - 4 * (m.steps - first[1]) / 25), rel=1e-9)
+
+
+def test_a_policy_that_reads_the_predicted_gain_trains_searches_six_weights_and_explores(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    from mrexplore.config import LearnedConfig
+    from mrexplore.pipeline import make_strategy
+
+    cfg = replace(TINY, search_generations=1, search_population=2, search_elites=1, search_episodes=1)
+    cfg = replace(cfg, dagger_rounds=1, ppo_iterations=0, learned=LearnedConfig(use_predicted_gain=True))
+    run = train(cfg, tmp_path / "run", None, workers=1, seed=2, predictor="none")
+    assert [r["stage"] for r in run.stages] == ["baseline", "search0", "dagger0"]
+    policy = load_policy(run.policy_path)
+    assert len(policy.net.edge_weights) == 6 and policy.net.cfg.use_predicted_gain
+    assert policy.meta["meta"]["predictor"] == {"path": "none", "sha256": ""}
+    hier = make_strategy("hier", policy=str(run.policy_path), predictor="none")
+    assert hier.predictor == {"path": "none", "sha256": ""} and hier.planner.predictor is None
+    assert make_strategy("hier").predictor is None  # the shipped policy reads no prediction

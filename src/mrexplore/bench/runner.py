@@ -82,6 +82,8 @@ class EpisodeSpec:
     """Every setting but the team size (``robots`` overrides ``run.sim.robots``); ``run.train`` is unused."""
     policy: str | None = None
     """Weights of a learned strategy (None: the shipped policy)."""
+    predictor: str | None = None
+    """Map predictor of a predictive strategy (a file, ``none``; None: the shipped one)."""
 
     @property
     def map_resolved(self) -> str:
@@ -95,9 +97,19 @@ class EpisodeSpec:
 
     @property
     def policy_sha256(self) -> str:
-        """sha256 of the policy a learned strategy runs ('' for the others)."""
-        kind = strategy_spec(self.strategy).policy_kind
-        return _policy_sha(kind, policy_for(self.strategy, self.policy)) if kind is not None else ""
+        """sha256 of the weights a strategy runs: a learned strategy's policy, a predictive one's map predictor
+        (``none`` where it runs without one); '' for the others."""
+        spec = strategy_spec(self.strategy)
+        if spec.predictive:
+            return _predictor_sha(self.predictor)
+        kind = spec.policy_kind
+        if kind is None:
+            return ""
+        policy = policy_for(self.strategy, self.policy)
+        sha = _policy_sha(kind, policy)
+        if kind == "hier" and _reads_prediction(policy):  # the predictor it reads is part of what it runs
+            sha += "+" + _predictor_sha(self.predictor)
+        return sha
 
     @property
     def key(self) -> tuple[str, str, int, int, str, str]:
@@ -109,6 +121,30 @@ def _policy_sha(kind: str, policy: str | None) -> str:
     from mrexplore.global_planning.learned.policy_file import default_ncm_policy_path, default_policy_path, file_sha256
 
     path = Path(policy) if policy else (default_ncm_policy_path() if kind == "ncm" else default_policy_path())
+    return file_sha256(path) if path.is_file() else ""
+
+
+@functools.lru_cache(maxsize=16)
+def _reads_prediction(policy: str | None) -> bool:
+    """Whether a ``hier`` policy file reads the predicted gain (False where it cannot be read: the bench's
+    start refuses it then)."""
+    from mrexplore.global_planning.learned.policy_file import HIER_FORMAT, hier_config, read_policy_file
+
+    try:
+        return hier_config(read_policy_file(Path(policy) if policy else None, HIER_FORMAT))[0].use_predicted_gain
+    except (MrExploreError, KeyError, TypeError, ValueError):
+        return False
+
+
+@functools.lru_cache(maxsize=16)
+def _predictor_sha(predictor: str | None) -> str:
+    from mrexplore.pipeline.registry import NO_PREDICTOR
+    from mrexplore.prediction.network import default_predictor_path
+    from mrexplore.weights_archive import file_sha256
+
+    if predictor == NO_PREDICTOR:
+        return NO_PREDICTOR
+    path = Path(predictor) if predictor else default_predictor_path()
     return file_sha256(path) if path.is_file() else ""
 
 
@@ -178,6 +214,7 @@ def run_episode(spec: EpisodeSpec) -> dict[str, Any]:
         run.local_planning,
         policy=spec.policy,
         coscan_cfg=run.coscan,
+        predictor=spec.predictor,
     )
     result = run_mission(
         MissionSpec(truth, strategy, replace(run.sim, robots=spec.robots), run.mission, seed=spec.seed), progress=False
@@ -289,8 +326,8 @@ def run_bench(
     """
     if not specs:
         return 0
-    for name, policy in {(s.strategy, s.policy) for s in specs}:
-        make_strategy(name, policy=policy)  # unknown names and unreadable policies fail before any work starts
+    for name, policy, predictor in {(s.strategy, s.policy, s.predictor) for s in specs}:
+        make_strategy(name, policy=policy, predictor=predictor)  # unknown names, unreadable files: fail before work
     results_csv.parent.mkdir(parents=True, exist_ok=True)
     _check_columns(results_csv)
     drop_partial_tail(results_csv)

@@ -109,6 +109,9 @@ class ExplorationPipeline:
     oracle, whose goals are viewpoints)."""
     policy: dict[str, str] | None = None
     """Where a learned planner's weights came from: ``{"path", "sha256", "code_version"}``; None: no network."""
+    predictor: dict[str, str] | None = None
+    """Where a predictive strategy's map predictor came from: ``{"path", "sha256"}`` (path ``none``: every
+    unknown cell taken for free); None: the strategy predicts nothing."""
     nearest_only: bool = False
     """The planner reads only each robot's nearest cluster (and its current goal's, for hysteresis)
     (:meth:`own_reads`)."""

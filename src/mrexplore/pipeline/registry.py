@@ -49,6 +49,9 @@ class PipelineConfigs:
     preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
     local: LocalPlanningConfig = field(default_factory=LocalPlanningConfig)
     coscan: CoScanConfig = field(default_factory=CoScanConfig)
+    predictor: str | None = None
+    """The map predictor of the predictive strategies: a file written by ``mrexplore train --predictor``,
+    ``none`` (every unknown cell free) or None (the shipped one)."""
 
 
 Factory = Callable[[PipelineConfigs, "str | None"], ExplorationPipeline]
@@ -64,18 +67,20 @@ class StrategySpec:
     policy_kind: str | None = None
     """The kind of policy file a learned strategy reads (``hier`` or ``ncm``, which ``--policy KIND=FILE``
     names); None: no network."""
+    predictive: bool = False
+    """The strategy reads a map predictor (``--predictor``)."""
 
 
 _REGISTRY: dict[str, StrategySpec] = {}
 
 
-def register_strategy(name: str, factory: Factory, policy_kind: str | None = None) -> None:
+def register_strategy(name: str, factory: Factory, policy_kind: str | None = None, predictive: bool = False) -> None:
     """Make ``factory``'s pipeline available as ``name`` to :func:`make_strategy`, the CLI and the bench."""
     if name in _REGISTRY:
         raise MrExploreError(f"strategy {name!r} is registered already; register it under another name")
     if name.endswith(NO_LOCAL_SUFFIX):
         raise MrExploreError(f"strategy names must not end in {NO_LOCAL_SUFFIX!r} (it removes the local layer)")
-    _REGISTRY[name] = StrategySpec(name, factory, policy_kind)
+    _REGISTRY[name] = StrategySpec(name, factory, policy_kind, predictive)
 
 
 def strategy_names() -> list[str]:
@@ -120,6 +125,7 @@ def make_strategy(
     local: bool = True,
     policy: str | None = None,
     coscan_cfg: CoScanConfig | None = None,
+    predictor: str | None = None,
 ) -> ExplorationPipeline:
     """The pipeline called ``name``; unknown names raise a one-line error listing the choices.
 
@@ -135,6 +141,7 @@ def make_strategy(
         preprocess_cfg or PreprocessConfig(),
         local_cfg or LocalPlanningConfig(),
         coscan_cfg or CoScanConfig(),
+        predictor,
     )
     pipeline = spec.factory(cfgs, policy_for(spec.name, policy))
     if not local and pipeline.local is not None:
@@ -178,6 +185,40 @@ def _hier_heuristic(c: PipelineConfigs, policy: str | None) -> ExplorationPipeli
     )
 
 
+NO_PREDICTOR = "none"
+"""``--predictor none``: the predictive strategies take every unknown cell for free."""
+
+
+def loaded_predictor(predictor: str | None) -> tuple[Any, dict[str, str]]:
+    """The map predictor ``predictor`` names (a file; None: the shipped one; ``none``: no network) and what a
+    mission's record says of it."""
+    if predictor == NO_PREDICTOR:
+        return None, {"path": NO_PREDICTOR, "sha256": ""}
+    from mrexplore.prediction.network import load_predictor
+
+    loaded = load_predictor(predictor)
+    return loaded, loaded.describe()
+
+
+def _hier_predict_heuristic(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
+    # hier-heuristic whose global cost also rewards the new area predicted beyond each cluster.
+    from mrexplore.global_planning.predictive import PredictiveUtilityPlanner
+
+    predictor, info = loaded_predictor(c.predictor)
+    router = LocalRouter(c.local, c.preprocess)
+    commitment = _commitment(c.global_, 1.0)
+    pipeline = ExplorationPipeline(
+        "hier-predict-heuristic",
+        PredictiveUtilityPlanner(predictor, c.global_),
+        c.preprocess,
+        router,
+        commitment,
+        distances=c.global_,
+    )
+    pipeline.predictor = info
+    return pipeline
+
+
 INFERENCE_ENV = "MREXPLORE_INFERENCE"
 """``numpy`` (default): the learned strategies decide with the NumPy networks, no torch; ``torch``: with the
 torch modules they were trained as (to compare the two, ``benchmarks/inference_parity.py``)."""
@@ -214,10 +255,13 @@ def _hier(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
     from mrexplore.global_planning.learned.policy import LearnedPlanner
 
     net, info = _loaded_policy("hier", policy)
-    planner = LearnedPlanner(net, c.global_)
+    predictor, predictor_info = loaded_predictor(c.predictor) if net.cfg.use_predicted_gain else (None, None)
+    planner = LearnedPlanner(net, c.global_, predictor=predictor)
     router = LocalRouter(c.local, c.preprocess)
     commitment = _commitment(c.global_, 1.0)
-    return ExplorationPipeline("hier", planner, c.preprocess, router, commitment, policy=info, distances=c.global_)
+    pipeline = ExplorationPipeline("hier", planner, c.preprocess, router, commitment, policy=info, distances=c.global_)
+    pipeline.predictor = predictor_info  # a policy that reads the predicted gain: the predictor it ran
+    return pipeline
 
 
 def _ncm(name: str, sample: bool = False, match: bool = False) -> Factory:
@@ -243,6 +287,7 @@ def _oracle(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
 
 register_strategy("hier", _hier, policy_kind="hier")
 register_strategy("hier-heuristic", _hier_heuristic)
+register_strategy("hier-predict-heuristic", _hier_predict_heuristic, predictive=True)
 register_strategy("nearest", _nearest)
 register_strategy("utility", _utility)
 register_strategy("coscan", _coscan)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-__all__ = ["plot_learning_curve"]
+__all__ = ["plot_learning_curve", "plot_predictor_curve"]
 
 
 def plot_learning_curve(log_csv: Path, png: Path, strategy: str = "hier", kept: str | None = None) -> bool:
@@ -70,6 +70,44 @@ def plot_learning_curve(log_csv: Path, png: Path, strategy: str = "hier", kept: 
     lines = ax2.get_lines() + ax3.get_lines()
     ax2.legend(lines, [ln.get_label() for ln in lines], loc="lower right", fontsize=8)
     ax2.set_xticks(x, stages, rotation=30)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+    return True
+
+
+def plot_predictor_curve(log_csv: Path, png: Path, kept_epoch: int) -> bool:
+    """The map predictor's run: training and validation loss per epoch (the kept epoch marked) above the
+    validation accuracy and IoU of predicted free space; returns False (writing nothing) where matplotlib is
+    not installed."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return False
+    with open(log_csv, newline="") as f:
+        rows = list(csv.DictReader(f))
+    x = [int(r["epoch"]) for r in rows]
+
+    def col(name: str) -> list[float]:
+        return [float(r[name]) for r in rows]
+
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    ax1.plot(x, col("loss"), "o-", color="tab:grey", label="training crops")
+    ax1.plot(x, col("val_loss"), "o-", color="tab:blue", label="validation beliefs")
+    if kept_epoch in x:
+        k = x.index(kept_epoch)
+        ax1.plot([kept_epoch], [col("val_loss")[k]], "*", ms=16, color="gold", mec="black", label=f"kept: {kept_epoch}")
+    ax1.set_ylabel("cross-entropy (unknown cells near a frontier)")
+    ax1.legend(loc="upper right", fontsize=8)
+    ax1.set_title(f"mrexplore train --predictor: {len(rows)} epoch{'s' * (len(rows) != 1)}, kept {kept_epoch}")
+    ax2.plot(x, col("val_accuracy"), "s-", color="tab:green", label="validation accuracy")
+    ax2.plot(x, col("val_iou"), "^-", color="tab:red", label="validation IoU of free space")
+    ax2.set_xlabel("epoch")
+    ax2.set_ylabel("share")
+    ax2.legend(loc="lower right", fontsize=8)
     fig.tight_layout()
     fig.savefig(png, dpi=110)
     plt.close(fig)

@@ -3,6 +3,7 @@ NeuralCoMapping, through the package's one replanning loop, returned as plain da
 
 from __future__ import annotations
 
+import functools
 import io
 import os
 from dataclasses import dataclass, replace
@@ -14,13 +15,14 @@ import torch
 
 from mrexplore.config import MapConfig, MissionConfig, SimConfig, TrainConfig
 from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS
-from mrexplore.global_planning.learned.features import graph_inputs
 from mrexplore.global_planning.learned.ncm_network import NcmCritic, NcmNet, NcmPlanner, NcmStep
 from mrexplore.global_planning.learned.network import MultiGraphNet
 from mrexplore.global_planning.learned.policy import LearnedPlanner, PolicyStep
 from mrexplore.maps.loaders import load_map_shared
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import ExplorationPipeline, NcmPipeline, make_strategy
+from mrexplore.pipeline.registry import loaded_predictor
+from mrexplore.prediction.network import MapPredictor
 from mrexplore.sim.measures import steps_to_coverage
 from mrexplore.threads import THREADS_ENV
 from mrexplore.training.expert import (
@@ -81,6 +83,9 @@ class EpisodeJob:
     mission: MissionConfig | None = None
     """Replanning and faults of the episode (None: defaults); the budget is ``cfg.max_steps`` and
     failures of robots beyond the team are left out."""
+    predictor: str | None = None
+    """The map predictor of a policy that reads the predicted gain: a file, ``none`` (every unknown cell
+    free) or None (the shipped one)."""
 
 
 class NcmActorCritic(torch.nn.Module):
@@ -114,6 +119,18 @@ def _net_from(job: EpisodeJob) -> MultiGraphNet | NcmActorCritic:
         net.load_state_dict(torch.load(io.BytesIO(job.weights), weights_only=True))
     net.eval()
     return net
+
+
+@functools.lru_cache(maxsize=4)
+def _predictor(spec: str | None) -> MapPredictor | None:
+    """A worker's map predictor, loaded once per file."""
+    return loaded_predictor(spec)[0]
+
+
+def _planner(job: EpisodeJob, net: MultiGraphNet, **kw: Any) -> LearnedPlanner:
+    """The job's learned planner, with its map predictor where the network reads the predicted gain."""
+    predictor = _predictor(job.predictor) if net.cfg.use_predicted_gain else None
+    return LearnedPlanner(net, predictor=predictor, **kw)
 
 
 def hier_pipeline(planner: LearnedPlanner | None) -> ExplorationPipeline:
@@ -169,7 +186,7 @@ def _run_episode(job: EpisodeJob) -> dict[str, Any]:
     if isinstance(net, NcmActorCritic):
         return _run_ncm(job, net)
     if job.kind == JobKind.EVAL:
-        m = episode_mission(job, hier_pipeline(LearnedPlanner(net) if job.weights is not None else None))
+        m = episode_mission(job, hier_pipeline(_planner(job, net) if job.weights is not None else None))
         decisions = 0
         while m.advance():
             m.decide()
@@ -182,7 +199,7 @@ def _run_episode(job: EpisodeJob) -> dict[str, Any]:
 
 def _run_expert(job: EpisodeJob, net: MultiGraphNet) -> dict[str, Any]:
     cfg = job.cfg
-    student = LearnedPlanner(net)
+    student = _planner(job, net)
     m = episode_mission(job, hier_pipeline(student))
     continuation = make_strategy("hier-heuristic").planner
     lookahead = known_world_returns if cfg.expert_world == "known" else lookahead_returns
@@ -201,7 +218,7 @@ def _run_expert(job: EpisodeJob, net: MultiGraphNet) -> dict[str, Any]:
                 returns = lookahead(m, cands, cfg.horizon_steps, continuation)
                 gains.append(float(returns.max() - returns[0]))  # candidate 0 is the student's own
                 if np.ptp(returns) > 0:  # a decision where every candidate is as good teaches nothing
-                    g = graph_inputs(problem, net.cfg, student.heuristic)  # the inputs alone, no forward pass
+                    g = student.inputs(problem)  # the inputs alone, no forward pass
                     labels.append(ExpertLabel(g, np.stack(cands), returns))
         m.commit(own)  # DAgger: the student's own action moves the episode on
         decisions += 1
@@ -211,7 +228,7 @@ def _run_expert(job: EpisodeJob, net: MultiGraphNet) -> dict[str, Any]:
 def _run_ppo(job: EpisodeJob, net: MultiGraphNet) -> dict[str, Any]:
     cfg = job.cfg
     record: list[PolicyStep] = []
-    planner = LearnedPlanner(net, sample=True, rng=np.random.default_rng([job.seed, 11]), record=record)
+    planner = _planner(job, net, sample=True, rng=np.random.default_rng([job.seed, 11]), record=record)
     m = episode_mission(job, hier_pipeline(planner))
     rewards: list[float] = []
     discounts: list[float] = []

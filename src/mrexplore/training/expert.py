@@ -21,6 +21,7 @@ __all__ = [
     "candidate_assignments",
     "lookahead_returns",
     "known_world_returns",
+    "predicted_world_returns",
     "horizon_return",
     "privileged_scalars",
 ]
@@ -126,6 +127,31 @@ def known_world_returns(
         return -float(m.steps - start_steps)
 
     return _roll_forward(mission, candidates, horizon_steps, continuation, steps_taken, known)
+
+
+def predicted_world_returns(
+    mission: Mission,
+    candidates: list[NDArray[np.int64]],
+    horizon_steps: int,
+    continuation: GlobalPlanner,
+    p_free: NDArray[np.floating],
+) -> NDArray[np.float64]:
+    """Eq. 9's return of each candidate run forward as :func:`lookahead_returns` runs them, but in the world
+    a map predictor completes: the cells the team has observed as they are, every other cell a wall where
+    ``p_free`` (the predictor's, ``(H, W)``, on the centre's grid) is below 0.5 and free elsewhere; the area
+    term counts the free cells of that world newly observed. Nothing the team has not seen but the prediction
+    enters the score. The mission is left as it was (posed)."""
+    walls = np.where(mission.sim.team_observed, mission.truth.occupied, np.asarray(p_free) < 0.5)
+    free = ~walls
+    r = mission.sim_cfg.reward
+    cell_m2 = mission.truth.resolution_m**2
+    start_seen = int((mission.sim.team_observed & free).sum())
+
+    def predicted_return(m: Mission, start_steps: int, start_known: int) -> float:
+        new_m2 = (int((m.sim.team_observed & free).sum()) - start_seen) * cell_m2
+        return float(r.time_reward * (m.steps - start_steps) + r.area_weight * new_m2)
+
+    return _roll_forward(mission, candidates, horizon_steps, continuation, predicted_return, walls)
 
 
 def privileged_scalars(mission: Mission) -> NDArray[np.float32]:

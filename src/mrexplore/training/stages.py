@@ -16,7 +16,6 @@ import numpy as np
 import torch
 
 from mrexplore.config import TrainConfig
-from mrexplore.global_planning.learned.features import EDGE_FEATURES
 from mrexplore.global_planning.learned.network import MultiGraphNet
 from mrexplore.training.episodes import EpisodeJob, JobKind, NcmActorCritic, training_jobs, weights_of
 from mrexplore.training.expert import ExpertLabel
@@ -126,7 +125,11 @@ class Search(Stage):
         net = ctx.net
         assert isinstance(net, MultiGraphNet)  # the search is hier's
         n = ctx.budget_left(cfg.search_population * cfg.search_episodes) // cfg.search_population
-        sigma = np.asarray(st.search_sigma) if st.search_sigma is not None else np.full(EDGE_FEATURES, cfg.search_sigma)
+        sigma = (
+            np.asarray(st.search_sigma)
+            if st.search_sigma is not None
+            else np.full(len(net.edge_weights), cfg.search_sigma)
+        )
         cands = search_candidates(net.edge_weights, sigma, cfg.search_population, rng)
         episodes = training_jobs(JobKind.EVAL, n, ctx.train_maps, cfg, rng, None)
         jobs: list[EpisodeJob] = []

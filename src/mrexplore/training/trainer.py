@@ -180,15 +180,25 @@ def train(
     say: Callable[[str], None] = lambda s: None,
     sim: SimConfig | None = None,
     mission: MissionConfig | None = None,
+    predictor: str | None = None,
 ) -> TrainResult:
     """Train the learned global layer into ``out`` (``policy.npz``, ``best.npz``, ``state.pt``, ``log.csv``,
     ``stages.csv``, ``curve.png``). ``minutes`` and ``episodes`` bound the run (the later stages are skipped).
-    ``sim`` and ``mission`` set the episodes' sensor, motion, replanning and faults (None: defaults)."""
+    ``sim`` and ``mission`` set the episodes' sensor, motion, replanning and faults (None: defaults);
+    ``predictor`` the map predictor of a policy that reads the predicted gain (a file, ``none``; None: the
+    shipped one)."""
     env = {"sim": config_to_dict(sim or SimConfig()), "mission": config_to_dict(mission or MissionConfig())}
     env["mission"].pop("baseline_bytes", None)  # rollouts never count them: not a setting here
 
     def placed(jobs: list[EpisodeJob]) -> list[EpisodeJob]:
-        return [replace(j, sim=sim, mission=mission) for j in jobs]
+        return [replace(j, sim=sim, mission=mission, predictor=predictor) for j in jobs]
+
+    predictor_info = None
+    if cfg.strategy == "hier" and cfg.learned.use_predicted_gain:
+        from mrexplore.pipeline.registry import loaded_predictor
+
+        predictor_info = loaded_predictor(predictor)[1]  # a file that cannot be read fails before any work
+        env["predictor"] = predictor_info
 
     out = Path(out)
     state_path = out / "state.pt"
@@ -296,7 +306,13 @@ def train(
                 save_policy(
                     out / "best.npz",
                     policy_net(net),
-                    {"stage": stage.name, **meta, "chosen_by": chosen_by, "train_config": config_to_dict(cfg)},
+                    {
+                        "stage": stage.name,
+                        **meta,
+                        "chosen_by": chosen_by,
+                        "train_config": config_to_dict(cfg),
+                        **({"predictor": predictor_info} if predictor_info else {}),
+                    },  # fmt: skip
                 )
             # log
             elapsed = time.perf_counter() - t0

@@ -51,3 +51,13 @@ def test_switched_off_features_are_zero() -> None:
     cfg = LearnedConfig(use_advantage=False, use_current_goal=False, use_isolation=False)
     g = graph_inputs(_problem([1, 0]), cfg, GlobalPlanningConfig())
     assert not g.edges[..., 2:].any()
+
+
+def test_a_policy_that_reads_the_predicted_gain_gets_it_as_a_sixth_edge_feature() -> None:
+    cfg = LearnedConfig(use_predicted_gain=True, gain_scale_m2=4.0)
+    g = graph_inputs(_problem(), cfg, GlobalPlanningConfig(), gain_m2=np.array([8.0, 2.0, 100.0]))
+    assert g.edges.shape == (2, 3, 6)
+    assert g.edges[..., 5].tolist() == [[2.0, 0.5, 10.0]] * 2  # m^2 / 4, the same for both robots, clipped
+    with pytest.raises(ValueError, match=r"needs one per cluster \(3\), got None"):
+        graph_inputs(_problem(), cfg, GlobalPlanningConfig())
+    assert graph_inputs(_problem(), LearnedConfig(), GlobalPlanningConfig()).edges.shape == (2, 3, 5)

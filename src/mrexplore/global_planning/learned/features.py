@@ -11,7 +11,7 @@ from mrexplore.config import GlobalPlanningConfig, LearnedConfig
 from mrexplore.global_planning.classical import utility_cost
 from mrexplore.global_planning.protocol import AssignmentProblem
 
-__all__ = ["GraphInputs", "graph_inputs", "EDGE_FEATURES", "ROBOT_FEATURES", "CLUSTER_FEATURES"]
+__all__ = ["GraphInputs", "graph_inputs", "edge_feature_count", "EDGE_FEATURES", "ROBOT_FEATURES", "CLUSTER_FEATURES"]
 
 ROBOT_FEATURES = 3
 """x, y (metres from the team's centroid / distance scale), label 1 (paper: s_ri = (x, y, label))."""
@@ -19,7 +19,8 @@ CLUSTER_FEATURES = 4
 """x, y, label 0, |C_k| x resolution / size scale (paper: c_k and g_ik)."""
 EDGE_FEATURES = 5
 """d_ik, g_ik (paper eq. 7's f_edge inputs), advantage, current goal, isolation (switchable, see
-:class:`~mrexplore.config.LearnedConfig`); a switched-off feature is zero."""
+:class:`~mrexplore.config.LearnedConfig`); a switched-off feature is zero. A policy trained with
+``use_predicted_gain`` reads a sixth (:func:`edge_feature_count`)."""
 _FAR = 10.0
 """Normalised distances are clipped to [-_FAR, _FAR] (unreachable pairs are masked anyway)."""
 
@@ -57,8 +58,19 @@ class GraphInputs:
         return len(self.clusters)
 
 
-def graph_inputs(problem: AssignmentProblem, cfg: LearnedConfig, heuristic: GlobalPlanningConfig) -> GraphInputs:
-    """Nodes, edges and masks of one decision, every distance in metres divided by ``cfg.distance_scale_m``.
+def edge_feature_count(cfg: LearnedConfig) -> int:
+    """Edge features of a network with ``cfg``: :data:`EDGE_FEATURES`, and the predicted gain where used."""
+    return EDGE_FEATURES + int(cfg.use_predicted_gain)
+
+
+def graph_inputs(
+    problem: AssignmentProblem,
+    cfg: LearnedConfig,
+    heuristic: GlobalPlanningConfig,
+    gain_m2: NDArray[np.float64] | None = None,
+) -> GraphInputs:
+    """Nodes, edges and masks of one decision, every distance in metres divided by ``cfg.distance_scale_m``;
+    ``gain_m2`` ``(n_clusters,)``: the predicted gain of each cluster (needed where ``cfg`` uses it).
 
     Examples
     --------
@@ -90,7 +102,7 @@ def graph_inputs(problem: AssignmentProblem, cfg: LearnedConfig, heuristic: Glob
     d_m = problem.dist_m
     reachable = np.isfinite(d_m)
     d = np.clip(np.where(reachable, d_m / ds, _FAR), -_FAR, _FAR)
-    edges = np.zeros((R, C, EDGE_FEATURES), np.float32)
+    edges = np.zeros((R, C, edge_feature_count(cfg)), np.float32)
     edges[..., 0] = d
     edges[..., 1] = (size_m / cfg.size_scale_m)[None, :]
     if cfg.use_advantage and R > 1:
@@ -109,6 +121,10 @@ def graph_inputs(problem: AssignmentProblem, cfg: LearnedConfig, heuristic: Glob
             edges[..., 4] = np.minimum(gap.min(axis=1) / ds, _FAR)[None, :]
         else:
             edges[..., 4] = _FAR
+    if cfg.use_predicted_gain:
+        if gain_m2 is None or len(gain_m2) != C:
+            raise ValueError(f"a network that reads the predicted gain needs one per cluster ({C}), got {gain_m2!r}")
+        edges[..., EDGE_FEATURES] = np.minimum(np.asarray(gain_m2) / cfg.gain_scale_m2, _FAR)[None, :]
     cost = utility_cost(problem, heuristic)
     base = np.where(reachable, -cost / cfg.base_scale, 0.0).astype(np.float32)
     return GraphInputs(robots, clusters, edges, reachable, base)

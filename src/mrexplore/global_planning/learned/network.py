@@ -17,6 +17,7 @@ from mrexplore.global_planning.learned.features import (
     EDGE_FEATURES,
     ROBOT_FEATURES,
     GraphInputs,
+    edge_feature_count,
 )
 
 __all__ = ["GraphBatch", "collate", "MultiGraphNet", "NEG_INF"]
@@ -54,7 +55,7 @@ def collate(items: Sequence[GraphInputs]) -> GraphBatch:
     C = max(1, max(g.n_clusters for g in items))
     robots = np.zeros((B, R, ROBOT_FEATURES), np.float32)
     clusters = np.zeros((B, C, CLUSTER_FEATURES), np.float32)
-    edges = np.zeros((B, R, C, EDGE_FEATURES), np.float32)
+    edges = np.zeros((B, R, C, items[0].edges.shape[-1] if items else EDGE_FEATURES), np.float32)
     reachable = np.zeros((B, R, C), bool)
     base = np.zeros((B, R, C), np.float32)
     rmask = np.zeros((B, R), bool)
@@ -102,10 +103,10 @@ class _CrossGraph(nn.Module):
     """Attention from one side of the bipartite cross graph to the other, similarity by the MLP f_edge over
     (query, key, edge features) (eqs. 7-8), then the residual update of eq. 6."""
 
-    def __init__(self, h: int) -> None:
+    def __init__(self, h: int, n_edge: int = EDGE_FEATURES) -> None:
         super().__init__()
         self.q, self.k, self.v = nn.Linear(h, h), nn.Linear(h, h), nn.Linear(h, h)
-        self.f_edge = _mlp(2 * h + EDGE_FEATURES, h, 1)
+        self.f_edge = _mlp(2 * h + n_edge, h, 1)
         self.f_v = _mlp(2 * h, h, h)
 
     def forward(self, x: Tensor, y: Tensor, edges: Tensor, mask: Tensor) -> Tensor:
@@ -136,21 +137,22 @@ class MultiGraphNet(nn.Module):
     def __init__(self, cfg: LearnedConfig, value_inputs: int = 0) -> None:
         super().__init__()
         h = cfg.hidden
+        n_edge = edge_feature_count(cfg)
         self.cfg = cfg
         self.robot_in = _mlp(ROBOT_FEATURES, h, h)
         self.cluster_in = _mlp(CLUSTER_FEATURES, h, h)
         self.robot_self = nn.ModuleList(_SelfGraph(h) for _ in range(cfg.blocks))
         self.cluster_self = nn.ModuleList(_SelfGraph(h) for _ in range(cfg.blocks))
-        self.robot_cross = nn.ModuleList(_CrossGraph(h) for _ in range(cfg.blocks))
-        self.cluster_cross = nn.ModuleList(_CrossGraph(h) for _ in range(cfg.blocks))
-        self.score = _mlp(2 * h + EDGE_FEATURES, h, 1)
+        self.robot_cross = nn.ModuleList(_CrossGraph(h, n_edge) for _ in range(cfg.blocks))
+        self.cluster_cross = nn.ModuleList(_CrossGraph(h, n_edge) for _ in range(cfg.blocks))
+        self.score = _mlp(2 * h + n_edge, h, 1)
         last = self.score[-1]
         assert isinstance(last, nn.Linear)
         nn.init.zeros_(last.weight)
         nn.init.zeros_(last.bias)
         # A linear path from the edge features straight to the residual, zero at the start. The trainer's
         # policy search (stage ``search``) sets it; gradients never move it (imitation and PPO train the rest).
-        self.edge_head = nn.Linear(EDGE_FEATURES, 1, bias=False)
+        self.edge_head = nn.Linear(n_edge, 1, bias=False)
         nn.init.zeros_(self.edge_head.weight)
         self.edge_head.weight.requires_grad_(False)
         self._register_load_state_dict_pre_hook(_zero_edge_head_if_missing)
@@ -195,13 +197,13 @@ class MultiGraphNet(nn.Module):
 
     @property
     def edge_weights(self) -> NDArray[np.float64]:
-        """The linear edge path's weights, ``(EDGE_FEATURES,)``: residual += edges . w."""
+        """The linear edge path's weights, one per edge feature: residual += edges . w."""
         return self.edge_head.weight.detach().double().numpy()[0].copy()
 
     def set_edge_weights(self, w: Sequence[float] | NDArray[np.floating]) -> None:
         """Set the linear edge path (the policy search's candidates)."""
         with torch.no_grad():
-            self.edge_head.weight.copy_(torch.as_tensor(np.asarray(w, np.float32)).reshape(1, EDGE_FEATURES))
+            self.edge_head.weight.copy_(torch.as_tensor(np.asarray(w, np.float32)).reshape(1, -1))
 
     def forward(self, batch: GraphBatch) -> tuple[Tensor, Tensor, Tensor]:
         """Affinities ``(B, R, C)`` (``-inf`` where a pair is not allowed) and the nodes ``(B, R|C, h)``."""

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrexplore.config import LearnedConfig
-from mrexplore.global_planning.learned.features import EDGE_FEATURES, GraphInputs
+from mrexplore.global_planning.learned.features import GraphInputs, edge_feature_count
 from mrexplore.global_planning.learned.ncm_inputs import NcmConfig, NcmInputs
 
 __all__ = ["GraphNetNp", "NcmNetNp", "log_optimal_transport_np"]
@@ -155,8 +155,8 @@ class GraphNetNp:
 
     @property
     def edge_weights(self) -> NDArray[np.float64]:
-        """The linear edge path's weights, ``(EDGE_FEATURES,)`` (zero for a policy saved without one)."""
-        return self.edge_w.astype(np.float64) if len(self.edge_w) else np.zeros(EDGE_FEATURES)
+        """The linear edge path's weights, one per edge feature (zero for a policy saved without one)."""
+        return self.edge_w.astype(np.float64) if len(self.edge_w) else np.zeros(edge_feature_count(self.cfg))
 
     def edge_path(self, g: GraphInputs) -> F32:
         """The linear edge path's part of the residual, ``(R, C)``."""

@@ -18,6 +18,8 @@ from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs
 from mrexplore.global_planning.learned.numpy_nets import GraphNetNp
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
+from mrexplore.prediction.gain import cluster_gains_m2
+from mrexplore.prediction.network import MapPredictor
 
 if TYPE_CHECKING:
     from torch import Tensor
@@ -176,6 +178,8 @@ class LearnedPlanner:
     record: list[PolicyStep] | None = None
     value_extra: NDArray[np.float32] | None = None
     """Privileged scalars for the critic at the next decision (set by the trainer; the actor never reads them)."""
+    predictor: MapPredictor | None = None
+    """The map predictor of a policy that reads the predicted gain (None: every unknown cell taken for free)."""
 
     def __post_init__(self) -> None:
         if isinstance(self.net, GraphNetNp):
@@ -191,6 +195,16 @@ class LearnedPlanner:
         if torch.get_num_threads() != 1:
             torch.set_num_threads(1)
 
+    def inputs(self, problem: AssignmentProblem) -> GraphInputs:
+        """The network's inputs at ``problem`` (the predicted gains among them where the policy reads them)."""
+        gains = None
+        if self.net.cfg.use_predicted_gain:
+            centres = problem.clusters.centers_rc
+            gains = cluster_gains_m2(
+                self.predictor, problem.state, centres, problem.resolution_m, self.heuristic.gain_range_m
+            )
+        return graph_inputs(problem, self.net.cfg, self.heuristic, gains)
+
     def affinity(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64], float]:
         """E_rc ``(R, C) float64`` (``-inf`` where unreachable), with the inputs and the critic's value.
 
@@ -201,7 +215,7 @@ class LearnedPlanner:
 
     def _cost(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64], float]:
         """The affinity in cost form, ``cost - base_scale * residual`` (``inf`` where unreachable)."""
-        g = graph_inputs(problem, self.net.cfg, self.heuristic)
+        g = self.inputs(problem)
         cost = utility_cost(problem, self.heuristic)
         if self.record is None and self.net.scores_nothing():
             # The scoring MLP adds zero: the residual is the linear edge path alone, and the blocks of

@@ -1,0 +1,50 @@
+"""The predicted gain of a scan and the planner that rewards it, on hand-drawn maps."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import state_grid
+
+from mrexplore.config import GlobalPlanningConfig
+from mrexplore.global_planning.predictive import PredictiveUtilityPlanner
+from mrexplore.global_planning.protocol import AssignmentProblem
+from mrexplore.prediction.baselines import predict_all_free
+from mrexplore.prediction.gain import predicted_gain_m2
+from mrexplore.preprocessing.clustering import Clusters
+from mrexplore.types import CellState
+
+# A corridor; its east end opens on unknown space, its west end on an unknown pocket of 2 cells.
+BELIEF = """
+    ###########
+    ??.......??
+    ###########
+"""
+
+
+def test_a_scan_counts_each_reachable_unknown_cell_by_its_probability_of_being_free() -> None:
+    state = state_grid(BELIEF)
+    p = predict_all_free(state, 1.0)
+    # from (1, 2), 10 m: both unknown cells west (1, 0), (1, 1) and both east (1, 9), (1, 10)
+    assert predicted_gain_m2(state, p, np.array([[1, 2]]), 1.0, 10.0).tolist() == [4.0]
+    p[1, 1] = 0.2  # the west pocket is probably a wall: its first cell counts 0.2 and hides the second
+    assert predicted_gain_m2(state, p, np.array([[1, 2]]), 1.0, 10.0) == pytest.approx([2.2])
+    # out of range: from (1, 2) with 1.5 m only (1, 1) is reached
+    assert predicted_gain_m2(state, p, np.array([[1, 2]]), 1.0, 1.5) == pytest.approx([0.2])
+    # 0.5 m cells: the areas are a quarter
+    assert predicted_gain_m2(state, predict_all_free(state, 0.5), np.array([[1, 2]]), 0.5, 5.0).tolist() == [1.0]
+
+
+def test_the_planner_sends_the_robot_where_more_is_predicted_at_equal_distance() -> None:
+    state = state_grid(BELIEF)
+    clusters = Clusters(np.array([[1, 2], [1, 8]], np.int32), np.array([1, 1], np.int32), np.zeros((2, 2), np.int32),
+                        np.zeros(2, np.int32))  # fmt: skip
+    problem = AssignmentProblem(np.array([[1, 5]], np.int32), clusters, np.array([[3.0, 3.0]]), 1.0, state)
+    planner = PredictiveUtilityPlanner(None, GlobalPlanningConfig(gain_weight=1.0, gain_range_m=10.0))
+    assert planner.gains_m2(problem).tolist() == [4.0, 4.0]  # each centre sees every unknown cell
+    small = GlobalPlanningConfig(gain_weight=1.0, gain_range_m=2.0)  # west: (1,0),(1,1); east: (1,9),(1,10)
+    planner = PredictiveUtilityPlanner(None, small)
+    assert planner.gains_m2(problem).tolist() == [2.0, 2.0]
+    state[1, 10] = CellState.FREE  # the east end seen: one unknown cell left there
+    assert planner.gains_m2(problem).tolist() == [2.0, 1.0]
+    assert planner.assign(problem).cluster_of_robot.tolist() == [0]

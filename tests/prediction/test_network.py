@@ -1,0 +1,130 @@
+"""The map predictor without torch: its convolution, its input, its prediction's frame and its file."""
+
+from __future__ import annotations
+
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import state_grid
+
+from mrexplore.prediction.network import (
+    PREDICTOR_FORMAT,
+    REACH_M,
+    MapPredictor,
+    UNetNp,
+    _conv,
+    belief_channels,
+    layer_shapes,
+    load_predictor,
+)
+from mrexplore.types import CellState, MrExploreError
+from mrexplore.weights_archive import write_weights_archive
+
+
+def _reference_conv(x: np.ndarray, w: np.ndarray, b: np.ndarray, dilation: int) -> np.ndarray:
+    """Zero-padded same-size cross-correlation, one output at a time."""
+    C, H, W = x.shape
+    n_out, _, k, _ = w.shape
+    p = dilation * (k // 2)
+    xp = np.pad(x, ((0, 0), (p, p), (p, p)))
+    out = np.zeros((n_out, H, W))
+    for o in range(n_out):
+        for r in range(H):
+            for c in range(W):
+                patch = xp[:, r : r + dilation * (k - 1) + 1 : dilation, c : c + dilation * (k - 1) + 1 : dilation]
+                out[o, r, c] = (patch * w[o]).sum() + b[o]
+    return out
+
+
+@pytest.mark.parametrize("dilation", [1, 2, 4])
+def test_the_convolution_is_a_plain_cross_correlation_with_zero_padding(dilation: int) -> None:
+    rng = np.random.default_rng(dilation)
+    x = rng.normal(size=(3, 7, 9)).astype(np.float32)
+    w = rng.normal(size=(2, 3, 3, 3)).astype(np.float32)
+    b = rng.normal(size=2).astype(np.float32)
+    np.testing.assert_allclose(_conv(x, w, b, dilation), _reference_conv(x, w, b, dilation), atol=1e-5)
+
+
+def test_the_input_pools_states_into_shares_and_pads_with_unknown() -> None:
+    state = state_grid(
+        """
+        .#?
+        ..?
+        """
+    )
+    x = belief_channels(state, 1)
+    assert x.shape == (3, 4, 4)  # padded to a multiple of 4 (two pooling levels)
+    assert x[:, 0, 0].tolist() == [1, 0, 0] and x[:, 0, 1].tolist() == [0, 1, 0] and x[:, 0, 2].tolist() == [0, 0, 1]
+    assert (x[2, 2:, :] == 1).all() and (x[2, :, 3] == 1).all()
+
+
+def _zero_state(width: int, head_bias: float = 0.0) -> dict[str, np.ndarray]:
+    state = {}
+    for name, (o, i, k) in layer_shapes(width).items():
+        state[f"{name}.weight"] = np.zeros((o, i, k, k), np.float32)
+        state[f"{name}.bias"] = np.zeros(o, np.float32)
+    state["head.bias"][:] = head_bias
+    return state
+
+
+def test_known_cells_keep_their_state_and_far_unknown_cells_are_free() -> None:
+    # logit -2 everywhere: p = 0.119 on unknown cells within reach of the known ones
+    pred = MapPredictor(UNetNp(2, _zero_state(2, head_bias=-2.0)), 0.2, Path("x.npz"), "", {})
+    state = np.full((4, 400), CellState.UNKNOWN, np.uint8)
+    state[1, :3] = [CellState.FREE, CellState.OCCUPIED, CellState.FREE]
+    p = pred.p_free(state, 0.1)
+    assert p[1, :3].tolist() == [1.0, 0.0, 1.0]
+    np.testing.assert_allclose(p[1, 3:40], 1 / (1 + np.exp(2.0)), rtol=1e-5)
+    reach = round(REACH_M / 0.1)
+    assert (p[:, 3 + reach + 8 :] == 1.0).all()  # beyond the box the network ran on (+ one pooling step)
+
+
+def test_a_predictor_file_round_trips(tmp_path: Path) -> None:
+    path = tmp_path / "p.npz"
+    write_weights_archive(path, {"format": PREDICTOR_FORMAT, "width": 2, "cell_m": 0.2}, _zero_state(2, 1.0))
+    loaded = load_predictor(path)
+    assert loaded.cell_m == 0.2 and loaded.net.width == 2 and len(loaded.sha256) == 64
+    assert loaded.describe() == {"path": str(path), "sha256": loaded.sha256}
+
+
+def test_bad_predictor_files_get_one_line_each(tmp_path: Path) -> None:
+    missing = tmp_path / "missing.npz"
+    with pytest.raises(MrExploreError) as e:
+        load_predictor(missing)
+    assert str(e.value) == (
+        f"predictor file {missing} not found; pass a file written by 'mrexplore train --predictor' with --predictor"
+    )
+    junk = tmp_path / "junk.npz"
+    junk.write_bytes(b"not a zip")
+    with pytest.raises(MrExploreError, match=r"is not a mrexplore map predictor \(BadZipFile\); retrain it$"):
+        load_predictor(junk)
+    headless = tmp_path / "headless.npz"
+    np.savez(headless, a=np.zeros(2))
+    with pytest.raises(MrExploreError, match=r"is not a mrexplore map predictor \(no header\); retrain it$"):
+        load_predictor(headless)
+    policy = tmp_path / "policy.npz"
+    write_weights_archive(policy, {"format": "mrexplore-policy-1"}, {"a": np.zeros(1)})
+    with pytest.raises(MrExploreError, match=r"\(no predictor format tag\); retrain it$"):
+        load_predictor(policy)
+    narrow = tmp_path / "narrow.npz"
+    write_weights_archive(narrow, {"format": PREDICTOR_FORMAT, "width": 3, "cell_m": 0.2}, _zero_state(2))
+    with pytest.raises(MrExploreError, match=r"does not fit this network \(enc1 has shape .*\); retrain it$"):
+        load_predictor(narrow)
+
+
+def test_a_predictor_whose_weights_changed_after_saving_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "p.npz"
+    write_weights_archive(path, {"format": PREDICTOR_FORMAT, "width": 2, "cell_m": 0.2}, _zero_state(2))
+    with np.load(path) as z:
+        members = {k: z[k] for k in z.files}
+    members["w:head.bias"] = np.ones(1, np.float32)
+    forged = tmp_path / "forged.npz"
+    np.savez(forged, **members)
+    assert zipfile.is_zipfile(forged)
+    with pytest.raises(MrExploreError) as e:
+        load_predictor(forged)
+    assert str(e.value) == (
+        f"predictor file {forged} is corrupted: its weights do not match the digest saved with them; retrain it"
+    )
