@@ -98,7 +98,7 @@ def test_given_starts(capsys) -> None:
         (
             ["--strategy", "greedy"],
             "mrexplore: error: unknown strategy 'greedy'; choose one of "
-            "hier, hier-heuristic, hier-predict-heuristic, nearest, utility, coscan, ncm, ncm-sampled, "
+            "hier, hier-heuristic, hier-predict-heuristic, hier-predict, nearest, utility, coscan, ncm, ncm-sampled, "
             "ncm-matched, oracle",
         ),
         (

@@ -5,8 +5,8 @@ from __future__ import annotations
 __all__ = ["BUILTIN_STRATEGIES", "TABLE_I", "check_strategy_name"]
 
 BUILTIN_STRATEGIES = (
-    "hier", "hier-heuristic", "hier-predict-heuristic", "nearest", "utility", "coscan", "ncm", "ncm-sampled",
-    "ncm-matched", "oracle",
+    "hier", "hier-heuristic", "hier-predict-heuristic", "hier-predict", "nearest", "utility", "coscan", "ncm",
+    "ncm-sampled", "ncm-matched", "oracle",
 )  # fmt: skip
 """In the order :mod:`mrexplore.pipeline.registry` registers them (a test holds the two together)."""
 TABLE_I = ("hier", "hier-heuristic", "utility", "coscan", "nearest", "ncm", "oracle")

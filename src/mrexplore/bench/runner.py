@@ -98,16 +98,14 @@ class EpisodeSpec:
     @property
     def policy_sha256(self) -> str:
         """sha256 of the weights a strategy runs: a learned strategy's policy, a predictive one's map predictor
-        (``none`` where it runs without one); '' for the others."""
+        (``none`` where it runs without one), both joined by ``+`` where it reads both; '' for the others."""
         spec = strategy_spec(self.strategy)
-        if spec.predictive:
-            return _predictor_sha(self.predictor)
         kind = spec.policy_kind
         if kind is None:
-            return ""
+            return _predictor_sha(self.predictor) if spec.predictive else ""
         policy = policy_for(self.strategy, self.policy)
         sha = _policy_sha(kind, policy)
-        if kind == "hier" and _reads_prediction(policy):  # the predictor it reads is part of what it runs
+        if spec.predictive or (kind == "hier" and _reads_prediction(policy)):  # the predictor is part of it
             sha += "+" + _predictor_sha(self.predictor)
         return sha
 

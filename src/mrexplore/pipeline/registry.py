@@ -264,6 +264,22 @@ def _hier(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
     return pipeline
 
 
+def _hier_predict(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
+    # hier's learned residual over hier-predict-heuristic's cost: the shipped policy and the predictor together.
+    from mrexplore.global_planning.learned.policy import LearnedPlanner
+
+    net, info = _loaded_policy("hier", policy)
+    predictor, predictor_info = loaded_predictor(c.predictor)
+    planner = LearnedPlanner(net, c.global_, name="learned-predict", predictor=predictor, gain_cost=True)
+    router = LocalRouter(c.local, c.preprocess)
+    commitment = _commitment(c.global_, 1.0)
+    pipeline = ExplorationPipeline(
+        "hier-predict", planner, c.preprocess, router, commitment, policy=info, distances=c.global_
+    )
+    pipeline.predictor = predictor_info
+    return pipeline
+
+
 def _ncm(name: str, sample: bool = False, match: bool = False) -> Factory:
     def make(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
         # NeuralCoMapping re-implemented: no hysteresis (it replans every robot every decision), no local
@@ -288,6 +304,7 @@ def _oracle(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
 register_strategy("hier", _hier, policy_kind="hier")
 register_strategy("hier-heuristic", _hier_heuristic)
 register_strategy("hier-predict-heuristic", _hier_predict_heuristic, predictive=True)
+register_strategy("hier-predict", _hier_predict, policy_kind="hier", predictive=True)
 register_strategy("nearest", _nearest)
 register_strategy("utility", _utility)
 register_strategy("coscan", _coscan)

@@ -193,7 +193,7 @@ def _crops(data: BeliefSet, n: int, side: int, rng: np.random.Generator) -> tupl
         x[k, :, a0 - r0 : a1 - r0, b0 - c0 : b1 - c0] = data.x[i][:, a0:a1, b0:b1]
         y[k, a0 - r0 : a1 - r0, b0 - c0 : b1 - c0] = data.label[i][a0:a1, b0:b1]
         m[k, a0 - r0 : a1 - r0, b0 - c0 : b1 - c0] = data.mask[i][a0:a1, b0:b1]
-    if rng.random() < 0.5:  # the world has no preferred orientation: flip and turn half the batches
+    if rng.random() < 0.5:  # the world has no preferred orientation: mirror half the batches, turn them all
         x, y, m = x[..., ::-1], y[..., ::-1], m[..., ::-1]
     turns = int(rng.integers(4))
     x, y, m = np.rot90(x, turns, (-2, -1)), np.rot90(y, turns, (-2, -1)), np.rot90(m, turns, (-2, -1))
@@ -315,7 +315,6 @@ def train_predictor(
         say(f"collected {len(train_set)} training and {len(val_set)} validation beliefs")
 
     bar = Progress(cfg.epochs, "train predictor", "epochs", progress, initial=st.epoch)
-    torch.set_num_threads(max(1, torch.get_num_threads()))
     row: dict[str, Any] = {}
     epoch_s = 0.0
     while st.epoch < cfg.epochs:

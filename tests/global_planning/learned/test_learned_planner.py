@@ -175,3 +175,32 @@ def test_a_learned_planner_runs_torch_on_one_thread() -> None:
     torch.set_num_threads(2)
     LearnedPlanner(MultiGraphNet(LearnedConfig()))
     assert torch.get_num_threads() == 1
+
+
+def test_hier_predict_is_hier_over_the_predictive_cost() -> None:
+    """``hier-predict``'s cost is hier's less ``gain_weight`` per m^2 of predicted gain; at weight 0 it decides
+    as hier does."""
+    from dataclasses import replace
+
+    from random_problems import random_problem
+
+    from mrexplore.config import GlobalPlanningConfig
+    from mrexplore.pipeline import make_strategy
+    from mrexplore.prediction.gain import cluster_gains_m2
+    from mrexplore.types import CellState
+
+    rng = np.random.default_rng(11)
+    hier = make_strategy("hier").planner
+    weighted = make_strategy("hier-predict", GlobalPlanningConfig(gain_weight=-0.5), predictor="none").planner
+    neutral = make_strategy("hier-predict", GlobalPlanningConfig(gain_weight=0.0), predictor="none").planner
+    for _ in range(30):
+        states = np.array([CellState.FREE, CellState.UNKNOWN, CellState.OCCUPIED], np.uint8)
+        problem = replace(random_problem(rng), state=states[rng.choice(3, size=(50, 50), p=[0.5, 0.4, 0.1])])
+        gains = cluster_gains_m2(None, problem.state, problem.clusters.centers_rc, 0.1, 6.0)
+        _, cost_hier, _ = hier._cost(problem)
+        _, cost_pred, _ = weighted._cost(problem)
+        reachable = np.isfinite(cost_hier)
+        assert np.array_equal(reachable, np.isfinite(cost_pred))
+        expected = np.broadcast_to(0.5 * gains, cost_hier.shape)[reachable]
+        np.testing.assert_allclose(cost_pred[reachable] - cost_hier[reachable], expected)
+        assert neutral.assign(problem).cluster_of_robot.tolist() == hier.assign(problem).cluster_of_robot.tolist()

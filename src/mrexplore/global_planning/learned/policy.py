@@ -6,7 +6,7 @@ where the planner is given the torch network."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -17,6 +17,7 @@ from mrexplore.global_planning.classical import utility_cost
 from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs
 from mrexplore.global_planning.learned.numpy_nets import GraphNetNp
+from mrexplore.global_planning.predictive import predicted_cost
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 from mrexplore.prediction.gain import cluster_gains_m2
 from mrexplore.prediction.network import MapPredictor
@@ -179,7 +180,11 @@ class LearnedPlanner:
     value_extra: NDArray[np.float32] | None = None
     """Privileged scalars for the critic at the next decision (set by the trainer; the actor never reads them)."""
     predictor: MapPredictor | None = None
-    """The map predictor of a policy that reads the predicted gain (None: every unknown cell taken for free)."""
+    """The map predictor of a policy that reads the predicted gain, or of ``gain_cost`` (None: every unknown
+    cell taken for free)."""
+    gain_cost: bool = False
+    """The heuristic cost under the learned residual is ``hier-predict-heuristic``'s (explore_lite's less
+    ``heuristic.gain_weight`` per m^2 of predicted gain), not explore_lite's alone (strategy ``hier-predict``)."""
 
     def __post_init__(self) -> None:
         if isinstance(self.net, GraphNetNp):
@@ -197,13 +202,24 @@ class LearnedPlanner:
 
     def inputs(self, problem: AssignmentProblem) -> GraphInputs:
         """The network's inputs at ``problem`` (the predicted gains among them where the policy reads them)."""
+        return self._inputs(problem)[0]
+
+    def _inputs(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64]]:
+        """The inputs and the heuristic cost ``(R, C) float64`` under the residual (``inf`` where unreachable)."""
         gains = None
-        if self.net.cfg.use_predicted_gain:
+        if self.net.cfg.use_predicted_gain or self.gain_cost:
             centres = problem.clusters.centers_rc
             gains = cluster_gains_m2(
                 self.predictor, problem.state, centres, problem.resolution_m, self.heuristic.gain_range_m
             )
-        return graph_inputs(problem, self.net.cfg, self.heuristic, gains)
+        g = graph_inputs(problem, self.net.cfg, self.heuristic, gains if self.net.cfg.use_predicted_gain else None)
+        cost = utility_cost(problem, self.heuristic)
+        if self.gain_cost:
+            assert gains is not None
+            cost = predicted_cost(problem, gains, self.heuristic)
+            base = np.where(g.reachable, -cost / self.net.cfg.base_scale, 0.0).astype(np.float32)
+            g = replace(g, base=base)
+        return g, cost
 
     def affinity(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64], float]:
         """E_rc ``(R, C) float64`` (``-inf`` where unreachable), with the inputs and the critic's value.
@@ -215,8 +231,7 @@ class LearnedPlanner:
 
     def _cost(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64], float]:
         """The affinity in cost form, ``cost - base_scale * residual`` (``inf`` where unreachable)."""
-        g = self.inputs(problem)
-        cost = utility_cost(problem, self.heuristic)
+        g, cost = self._inputs(problem)
         if self.record is None and self.net.scores_nothing():
             # The scoring MLP adds zero: the residual is the linear edge path alone, and the blocks of
             # attention would run for nothing (1.1 of the 1.7 ms the learned assignment took a decision at
