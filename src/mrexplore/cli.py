@@ -59,8 +59,8 @@ POLICY_HELP = (
 TRAIN_PREDICTOR = "\0train"
 """``train --predictor`` given alone: train the map predictor."""
 PREDICTOR_HELP = (
-    "map predictor of the predictive strategies (hier-predict-heuristic): FILE written by 'mrexplore train "
-    "--predictor', or none (every unknown cell free); default: the shipped one"
+    "map predictor of the predictive strategies (hier-predict-heuristic, hier-predict): FILE written by "
+    "'mrexplore train --predictor', or none (every unknown cell free); default: the shipped one"
 )
 MIN_REPLAN_HELP = (
     "steps a robot whose goal was seen drives on before the team replans "
