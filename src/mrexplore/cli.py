@@ -735,6 +735,8 @@ def _need_torch() -> None:
 
 def _train(args: argparse.Namespace) -> str:
     run = _run_config(args)
+    if args.minutes is not None and not (math.isfinite(args.minutes) and args.minutes > 0):
+        raise MrExploreError(f"--minutes must be > 0, got {args.minutes}")
     if args.predictor == TRAIN_PREDICTOR:
         return _train_predictor(args, run)
     if args.predictor is not None and not (run.train.strategy == "hier" and run.train.learned.use_predicted_gain):
@@ -744,8 +746,6 @@ def _train(args: argparse.Namespace) -> str:
         )
     if args.strategy is not None:
         run = replace(run, train=replace(run.train, strategy=args.strategy))
-    if args.minutes is not None and not (math.isfinite(args.minutes) and args.minutes > 0):
-        raise MrExploreError(f"--minutes must be > 0, got {args.minutes}")
     if args.episodes is not None and args.episodes < 1:
         raise MrExploreError(f"--episodes must be >= 1, got {args.episodes}")
     _check_output(args.out, "--out", folder=True)
@@ -785,8 +785,6 @@ def _train_predictor(args: argparse.Namespace, run: RunConfig) -> str:
     if args.strategy is not None or args.episodes is not None:
         flag = "--strategy" if args.strategy is not None else "--episodes"
         raise MrExploreError(f"{flag} does not apply to --predictor (it trains on collected beliefs); drop it")
-    if args.minutes is not None and not (math.isfinite(args.minutes) and args.minutes > 0):
-        raise MrExploreError(f"--minutes must be > 0, got {args.minutes}")
     _check_output(args.out, "--out", folder=True)
     _need_torch()
     say_if_compiling()
