@@ -104,3 +104,26 @@ def test_a_run_stopped_by_its_budget_resumes_where_it_stopped(tmp_path: Path) ->
     assert (out / "curve.png").stat().st_size > 0
     with pytest.raises(MrExploreError, match=r"nothing to resume in .* \(no state.pt\)"):
         train_predictor(TINY, tmp_path / "other", None, resume=True, progress=False)
+
+
+def test_beliefs_round_trip_reading_each_archive_member_once() -> None:
+    """An archive member decompresses anew at every access: reading one per belief took minutes and 24 GB."""
+    rng = np.random.default_rng(0)
+    shapes = [(4, 8), (8, 4), (12, 12)]
+    data = BeliefSet(
+        [rng.random((3, h, w)).astype(np.float16) for h, w in shapes],
+        [rng.random((h, w)) < 0.5 for h, w in shapes],
+        [rng.random((h, w)) < 0.5 for h, w in shapes],
+    )
+    arrays = data.to_arrays("train")
+    reads: dict[str, int] = {}
+
+    class Archive(dict):
+        def __getitem__(self, key: str) -> np.ndarray:
+            reads[key] = reads.get(key, 0) + 1
+            return super().__getitem__(key)
+
+    back = BeliefSet.from_arrays(Archive(arrays), "train")
+    assert set(reads.values()) == {1} and len(reads) == 4
+    for a, b in zip(data.x + data.label + data.mask, back.x + back.label + back.mask, strict=True):
+        assert np.array_equal(a, b)

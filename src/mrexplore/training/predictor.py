@@ -88,13 +88,17 @@ class BeliefSet:
 
     @classmethod
     def from_arrays(cls, z: Any, prefix: str) -> BeliefSet:
+        """The set :meth:`to_arrays` wrote, from ``np.load``'s archive ``z`` (each array read once: every
+        access to an archive member decompresses it anew)."""
+        shapes, xs = z[f"{prefix}_shapes"], z[f"{prefix}_x"]
+        labels, masks = z[f"{prefix}_label"], z[f"{prefix}_mask"]
         out = cls([], [], [])
         at = 0
-        for h, w in z[f"{prefix}_shapes"]:
+        for h, w in shapes:
             n = int(h * w)
-            out.x.append(z[f"{prefix}_x"][:, at : at + n].reshape(3, h, w))
-            out.label.append(z[f"{prefix}_label"][at : at + n].reshape(h, w))
-            out.mask.append(z[f"{prefix}_mask"][at : at + n].reshape(h, w))
+            out.x.append(xs[:, at : at + n].reshape(3, h, w))
+            out.label.append(labels[at : at + n].reshape(h, w))
+            out.mask.append(masks[at : at + n].reshape(h, w))
             at += n
         return out
 
