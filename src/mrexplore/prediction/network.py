@@ -44,12 +44,12 @@ __all__ = [
 PREDICTOR_FORMAT = "mrexplore-predictor-1"
 """Format tag of a predictor file."""
 MAX_PREDICTOR_BYTES = 64 << 20
-"""Largest predictor file read (the shipped one is a few hundred kB): a bigger one is refused before it is read."""
+"""Largest predictor file read (the shipped one is 137 kB): a bigger one is refused before it is read."""
 POOL_LEVELS = 2
-REACH_M = 8.0
-"""The network runs on the box of the known cells grown by this much: farther unknown cells are beyond the
-6 m band near a frontier that planners read."""
 """Max-pooling levels of the U-Net: the predictor's grid is padded to a multiple of ``2 ** POOL_LEVELS``."""
+REACH_M = 8.0
+"""The network runs on the box of the known cells grown by this much, metres: farther unknown cells lie
+beyond the 6 m band near a frontier that planners read."""
 IN_CHANNELS = 3
 """Share of free, occupied and unknown planning cells under each predictor cell."""
 LAYERS = ("enc1", "enc2", "mid1", "mid2", "mid3", "dec2", "dec1", "head")
