@@ -141,14 +141,16 @@ def main() -> None:
         accepted = node.get_clock().now().to_msg()
         nav(GoalStatus.STATUS_EXECUTING, gid, accepted)
         spin(0.5)
-        n_goals, round_before = len(goals), statuses[-1]["round"]
+        n_goals = len(goals)
         nav(GoalStatus.STATUS_ABORTED, gid, accepted)
         got = wait_goal(n_goals + 1, 10)
         spin(0.3)
         after = [s["round"] for s in statuses if s["decisions"] >= 2]
+        # from the first round that read the abort (a round open when it came may close first)
+        read = [s["round"] for s in statuses if s["aborts"] >= 1]
         result["abort"] = {
             "new_goal": got and goals[-1] != goals[n_goals - 1],
-            "rounds_after_abort": (after[0] - round_before) if after else None,
+            "rounds_after_abort": (after[0] - read[0]) if after and read else None,
             "aborts": statuses[-1]["aborts"],
         }
         # Bad messages: each one warning line, dropped; the centre keeps what it had and goes on.
