@@ -252,7 +252,7 @@ def train_predictor(
     sim: SimConfig | None = None,
 ) -> tuple[Path, dict[str, Any]]:
     """Train the map predictor into ``out`` (``predictor.npz``, ``best.npz``, ``beliefs.npz``, ``state.pt``,
-    ``log.csv``, ``curve.png``); returns the predictor's path and its validation row."""
+    ``log.csv``, ``curve.png``); returns the predictor's path, the kept epoch and its validation loss."""
     out = Path(out)
     state_path = out / "state.pt"
     if state_path.exists() and not resume:
@@ -319,7 +319,6 @@ def train_predictor(
         say(f"collected {len(train_set)} training and {len(val_set)} validation beliefs")
 
     bar = Progress(cfg.epochs, "train predictor", "epochs", progress, initial=st.epoch)
-    row: dict[str, Any] = {}
     epoch_s = 0.0
     while st.epoch < cfg.epochs:
         now = time.perf_counter()
@@ -346,7 +345,7 @@ def train_predictor(
             meta = {"epoch": st.epoch, "val_loss": val_loss, "val_accuracy": val_acc, "val_iou": val_iou}
             _save(out / "best.npz", net, cfg, meta)
         # log
-        row = {
+        row: dict[str, Any] = {
             "time_s": round(time.perf_counter() - t_start, 1), "epoch": st.epoch, "beliefs": len(train_set),
             "loss": float(np.mean(losses)), "val_loss": val_loss, "val_accuracy": val_acc, "val_iou": val_iou,
             "crops_per_s": round(crops_per_s, 1),

@@ -312,7 +312,7 @@ def train(
                         "chosen_by": chosen_by,
                         "train_config": config_to_dict(cfg),
                         **({"predictor": predictor_info} if predictor_info else {}),
-                    },  # fmt: skip
+                    },
                 )
             # log
             elapsed = time.perf_counter() - t0
