@@ -399,6 +399,13 @@ class GlobalPlanningConfig(_Checked):
     fraction of the distance to that goal, and a robot that keeps the cluster keeps its goal and route; 1: none
     (every decision starts afresh); None: the strategy's default (0.5 for strategies that go to cluster
     centres, 1 for hier, whose routes already commit)."""
+    learned_min_robots: int = 2
+    """``hier`` and ``hier-predict`` add their learned residual for teams of at least this many robots; a
+    smaller team (a lone robot, or a team down to one) decides by the heuristic cost alone, as
+    ``hier-heuristic`` (``hier-predict-heuristic``). The residual is a coordination policy, searched on
+    teams of 2-5; with a lone robot it won nothing measurable on the training's validation maps (+2.0%
+    [-1.3, +5.3] fewer steps than the heuristic with the 6 m sensor, +0.6% [-2.5, +3.6] with 8 m) and lost
+    on held-out DungeonMaps (docs/learned.md). 1: the residual for every team."""
     far_above_cells: int = 2_000_000
     """Once the known passable cells' bounding box holds more cells than this, robot distances are exact
     only within ``exact_radius_m`` and estimated beyond it on a grid of ``coarse_cell_m`` blocks
@@ -425,6 +432,7 @@ class GlobalPlanningConfig(_Checked):
         "gain_weight": Interval(-100, 100),
         "gain_range_m": _positive("metres"),
         "commitment": Interval(0, 1, none="the strategy's default"),
+        "learned_min_robots": _at_least(1),
         "far_above_cells": _non_negative(),
         "exact_radius_m": _positive("metres"),
         "coarse_cell_m": _positive("metres"),

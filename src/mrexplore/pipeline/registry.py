@@ -251,12 +251,13 @@ def _loaded_policy(kind: str, policy: str | None) -> tuple[Any, dict[str, str]]:
 
 
 def _hier(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
-    # The paper's three layers with the learned global layer (mGNN affinities, Hungarian decoding).
+    # The paper's three layers with the learned global layer (mGNN affinities, Hungarian decoding); a team under
+    # learned_min_robots decides as hier-heuristic.
     from mrexplore.global_planning.learned.policy import LearnedPlanner
 
     net, info = _loaded_policy("hier", policy)
     predictor, predictor_info = loaded_predictor(c.predictor) if net.cfg.use_predicted_gain else (None, None)
-    planner = LearnedPlanner(net, c.global_, predictor=predictor)
+    planner = LearnedPlanner(net, c.global_, predictor=predictor, min_robots=c.global_.learned_min_robots)
     router = LocalRouter(c.local, c.preprocess)
     commitment = _commitment(c.global_, 1.0)
     pipeline = ExplorationPipeline("hier", planner, c.preprocess, router, commitment, policy=info, distances=c.global_)
@@ -270,7 +271,9 @@ def _hier_predict(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline
 
     net, info = _loaded_policy("hier", policy)
     predictor, predictor_info = loaded_predictor(c.predictor)
-    planner = LearnedPlanner(net, c.global_, name="learned-predict", predictor=predictor, gain_cost=True)
+    planner = LearnedPlanner(
+        net, c.global_, "learned-predict", predictor=predictor, gain_cost=True, min_robots=c.global_.learned_min_robots
+    )
     router = LocalRouter(c.local, c.preprocess)
     commitment = _commitment(c.global_, 1.0)
     pipeline = ExplorationPipeline(

@@ -204,3 +204,36 @@ def test_hier_predict_is_hier_over_the_predictive_cost() -> None:
         expected = np.broadcast_to(0.5 * gains, cost_hier.shape)[reachable]
         np.testing.assert_allclose(cost_pred[reachable] - cost_hier[reachable], expected)
         assert neutral.assign(problem).cluster_of_robot.tolist() == hier.assign(problem).cluster_of_robot.tolist()
+
+
+def test_a_lone_robot_decides_by_the_heuristic_unless_told_otherwise() -> None:
+    """Under ``learned_min_robots`` (default 2) hier adds no residual: a lone robot's choice is utility's on
+    every problem, though the shipped residual would choose otherwise on some; a team of two keeps it."""
+    from dataclasses import replace
+
+    from mrexplore.config import GlobalPlanningConfig
+
+    rng = np.random.default_rng(5)
+    gated, always = (
+        make_strategy("hier").planner,
+        make_strategy("hier", GlobalPlanningConfig(learned_min_robots=1)).planner,
+    )
+    utility = UtilityPlanner()
+    lone_differs = team_differs = 0
+    for _ in range(300):
+        p = _random_problem(rng)
+        lone = replace(p, robots_rc=p.robots_rc[:1], dist_cells=p.dist_cells[:1], current_cluster=p.current_cluster[:1])
+        assert gated.assign(lone).cluster_of_robot.tolist() == utility.assign(lone).cluster_of_robot.tolist()
+        lone_differs += always.assign(lone).cluster_of_robot.tolist() != utility.assign(lone).cluster_of_robot.tolist()
+        if p.n_robots >= 2:
+            assert gated.assign(p).cluster_of_robot.tolist() == always.assign(p).cluster_of_robot.tolist()
+            team_differs += gated.assign(p).cluster_of_robot.tolist() != utility.assign(p).cluster_of_robot.tolist()
+    assert lone_differs > 0 and team_differs > 0
+
+
+def test_lone_hier_runs_exactly_as_hier_heuristic() -> None:
+    truth = load_map("generated:5", MapConfig(resolution_m=0.1))
+    a = run_mission(MissionSpec(truth, make_strategy("hier"), SimConfig(robots=1), seed=2))
+    b = run_mission(MissionSpec(truth, make_strategy("hier-heuristic"), SimConfig(robots=1), seed=2))
+    da, db = a.measures.to_dict(), b.measures.to_dict()
+    assert {k: v for k, v in da.items() if k not in TIMING} == {k: v for k, v in db.items() if k not in TIMING}

@@ -185,6 +185,10 @@ class LearnedPlanner:
     gain_cost: bool = False
     """The heuristic cost under the learned residual is ``hier-predict-heuristic``'s (explore_lite's less
     ``heuristic.gain_weight`` per m^2 of predicted gain), not explore_lite's alone (strategy ``hier-predict``)."""
+    min_robots: int = 1
+    """Deterministic decisions of a smaller team take the heuristic cost alone, without the residual (the
+    strategies set it from :attr:`~mrexplore.config.GlobalPlanningConfig.learned_min_robots`; sampling and
+    recording for training always add it)."""
 
     def __post_init__(self) -> None:
         if isinstance(self.net, GraphNetNp):
@@ -232,6 +236,8 @@ class LearnedPlanner:
     def _cost(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64], float]:
         """The affinity in cost form, ``cost - base_scale * residual`` (``inf`` where unreachable)."""
         g, cost = self._inputs(problem)
+        if problem.n_robots < self.min_robots and self.record is None and not self.sample:
+            return g, cost, 0.0
         if self.record is None and self.net.scores_nothing():
             # The scoring MLP adds zero: the residual is the linear edge path alone, and the blocks of
             # attention would run for nothing (1.1 of the 1.7 ms the learned assignment took a decision at
