@@ -60,6 +60,26 @@ def test_the_input_pools_states_into_shares_and_pads_with_unknown() -> None:
     assert (x[2, 2:, :] == 1).all() and (x[2, :, 3] == 1).all()
 
 
+@pytest.mark.parametrize("factor", [1, 2, 3, 4])
+def test_the_pooled_input_equals_the_shares_counted_block_by_block(factor: int) -> None:
+    """The one-pass count against each block's share of each state, padding unknown, for grids that are no
+    multiple of the block."""
+    rng = np.random.default_rng(factor)
+    for shape in [(1, 1), (5, 7), (13, 11), (16, 16)]:
+        state = rng.choice(np.array([CellState.FREE, CellState.OCCUPIED, CellState.UNKNOWN], np.uint8), size=shape)
+        x = belief_channels(state, factor)
+        step = factor * 4
+        Hp, Wp = -(-shape[0] // step) * step, -(-shape[1] // step) * step
+        padded = np.full((Hp, Wp), CellState.UNKNOWN, np.uint8)
+        padded[: shape[0], : shape[1]] = state
+        assert x.shape == (3, Hp // factor, Wp // factor) and x.dtype == np.float32
+        for k, s in enumerate((CellState.FREE, CellState.OCCUPIED, CellState.UNKNOWN)):
+            for r in range(Hp // factor):
+                for c in range(Wp // factor):
+                    block = padded[r * factor : (r + 1) * factor, c * factor : (c + 1) * factor]
+                    assert x[k, r, c] == np.float32((block == s).sum() / factor**2)
+
+
 def _zero_state(width: int, head_bias: float = 0.0) -> dict[str, np.ndarray]:
     state = {}
     for name, (o, i, k) in layer_shapes(width).items():

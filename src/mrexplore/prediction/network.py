@@ -19,6 +19,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
@@ -100,12 +101,26 @@ def belief_channels(state: StateGrid, factor: int) -> NDArray[np.float32]:
     H, W = state.shape
     step = factor * 2**POOL_LEVELS
     Hp, Wp = math.ceil(H / step) * step, math.ceil(W / step) * step
-    padded = np.full((Hp, Wp), CellState.UNKNOWN, np.uint8)
-    padded[:H, :W] = state
-    blocks = padded.reshape(Hp // factor, factor, Wp // factor, factor)
-    out = np.empty((IN_CHANNELS, Hp // factor, Wp // factor), np.float32)
-    for k, s in enumerate((CellState.FREE, CellState.OCCUPIED, CellState.UNKNOWN)):
-        out[k] = (blocks == s).mean(axis=(1, 3))
+    counts = _block_counts(np.ascontiguousarray(state, np.uint8), factor, Hp // factor, Wp // factor)
+    return (counts / float(factor * factor)).astype(np.float32)
+
+
+_UNKNOWN = int(CellState.UNKNOWN)
+
+
+@nb.njit(cache=True, nogil=True)
+def _block_counts(state: np.ndarray, factor: int, h: int, w: int) -> np.ndarray:  # pragma: no cover - numba
+    """``(3, h, w) float64``: free, occupied and unknown cells of each ``factor x factor`` block, the cells
+    beyond ``state`` counted unknown (one pass over the grid; three boolean means took 3.3 ms at 0.05 m on
+    the largest HouseExpo map)."""
+    out = np.zeros((3, h, w))
+    out[2] = factor * factor
+    for r in range(state.shape[0]):
+        for c in range(state.shape[1]):
+            s = state[r, c]  # the channel is the state's value: free 0, occupied 1, unknown 2
+            if s != _UNKNOWN:
+                out[s, r // factor, c // factor] += 1.0
+                out[2, r // factor, c // factor] -= 1.0
     return out
 
 
