@@ -285,7 +285,9 @@ def test_hostile_policy_files(tmp_path, capsys) -> None:
         assert f"policy file {path} " in _err(capsys)
 
 
-@pytest.mark.parametrize("script", ["profile_decision.py", "step_and_decision.py", "fields.py", "meanshift.py"])
+@pytest.mark.parametrize(
+    "script", ["profile_decision.py", "step_and_decision.py", "fields.py", "meanshift.py", "predictor_cost.py"]
+)
 def test_benchmarks_give_one_line_on_bad_input(script: str) -> None:
     benchmarks = Path(__file__).resolve().parents[1] / "benchmarks"
     out = subprocess.run(
