@@ -394,6 +394,11 @@ class GlobalPlanningConfig(_Checked):
     gain_range_m: float = 6.0
     """``hier-predict-heuristic``: range of the scan its predicted gain is cast with, metres (the sensor's
     default range)."""
+    path_weight: float = 0.0
+    """``hier-predict-heuristic``: cost per metre by which a cluster's path through predicted free space
+    (known free cells and unknown ones predicted free) is shorter than its path through known free space:
+    the predicted shortcut, a sign that the space behind the cluster also opens nearer the robot. 0: not
+    computed (it costs one more distance field per robot at every decision)."""
     commitment: float | None = None
     """Goal hysteresis at re-decisions: the cluster holding a robot's current goal is offered to it at this
     fraction of the distance to that goal, and a robot that keeps the cluster keeps its goal and route; 1: none
@@ -431,6 +436,7 @@ class GlobalPlanningConfig(_Checked):
         "size_weight": _non_negative(),
         "gain_weight": Interval(-100, 100),
         "gain_range_m": _positive("metres"),
+        "path_weight": Interval(-100, 100),
         "commitment": Interval(0, 1, none="the strategy's default"),
         "learned_min_robots": _at_least(1),
         "far_above_cells": _non_negative(),

@@ -7,7 +7,7 @@ import pytest
 from conftest import state_grid
 
 from mrexplore.config import GlobalPlanningConfig
-from mrexplore.global_planning.predictive import PredictiveUtilityPlanner
+from mrexplore.global_planning.predictive import PredictiveUtilityPlanner, predicted_terms
 from mrexplore.global_planning.protocol import AssignmentProblem
 from mrexplore.prediction.baselines import predict_all_free
 from mrexplore.prediction.gain import predicted_gain_m2
@@ -40,11 +40,47 @@ def test_the_planner_sends_the_robot_where_more_is_predicted_at_equal_distance()
     clusters = Clusters(np.array([[1, 2], [1, 8]], np.int32), np.array([1, 1], np.int32), np.zeros((2, 2), np.int32),
                         np.zeros(2, np.int32))  # fmt: skip
     problem = AssignmentProblem(np.array([[1, 5]], np.int32), clusters, np.array([[3.0, 3.0]]), 1.0, state)
-    planner = PredictiveUtilityPlanner(None, GlobalPlanningConfig(gain_weight=1.0, gain_range_m=10.0))
-    assert planner.gains_m2(problem).tolist() == [4.0, 4.0]  # each centre sees every unknown cell
+    wide = GlobalPlanningConfig(gain_weight=1.0, gain_range_m=10.0)
+    assert predicted_terms(None, problem, wide).gain_m2.tolist() == [4.0, 4.0]  # each centre sees every unknown cell
     small = GlobalPlanningConfig(gain_weight=1.0, gain_range_m=2.0)  # west: (1,0),(1,1); east: (1,9),(1,10)
     planner = PredictiveUtilityPlanner(None, small)
-    assert planner.gains_m2(problem).tolist() == [2.0, 2.0]
+    assert predicted_terms(None, problem, small).gain_m2.tolist() == [2.0, 2.0]
     state[1, 10] = CellState.FREE  # the east end seen: one unknown cell left there
-    assert planner.gains_m2(problem).tolist() == [2.0, 1.0]
+    assert predicted_terms(None, problem, small).gain_m2.tolist() == [2.0, 1.0]
     assert planner.assign(problem).cluster_of_robot.tolist() == [0]
+
+
+# A loop of known corridor around a block of wall, open at the top but for one unknown cell (1, 3).
+LOOP = """
+    #######
+    #..?..#
+    #.###.#
+    #.....#
+    #######
+"""
+
+
+def test_the_predicted_shortcut_is_the_known_path_less_the_predicted_one() -> None:
+    """From (1, 1), the cluster at (1, 4) is 9 cells away through known space (down, along, up) and 3 through
+    the unknown cell if it is free: a shortcut of 6 m; the cluster at (1, 2) has none."""
+    from mrexplore.prediction.gain import predicted_paths_m
+
+    state = state_grid(LOOP)
+    clusters = Clusters(np.array([[1, 2], [1, 4]], np.int32), np.array([1, 1], np.int32), np.zeros((2, 2), np.int32),
+                        np.zeros(2, np.int32))  # fmt: skip
+    p = predict_all_free(state, 1.0)
+    assert predicted_paths_m(state, p, np.array([[1, 1]]), clusters.centers_rc, 1.0).tolist() == [[1.0, 3.0]]
+    p[1, 3] = 0.0  # a predictor that walls the gap: the known paths
+    assert predicted_paths_m(state, p, np.array([[1, 1]]), clusters.centers_rc, 1.0).tolist() == [[1.0, 9.0]]
+    problem = AssignmentProblem(np.array([[1, 1]], np.int32), clusters, np.array([[1.0, 9.0]]), 1.0, state)
+    cfg = GlobalPlanningConfig(gain_weight=0.0, path_weight=1.0)
+    terms = predicted_terms(None, problem, cfg)
+    assert terms.shortcut_m is not None and terms.shortcut_m.tolist() == [[0.0, 6.0]]
+    assert predicted_terms(None, problem, GlobalPlanningConfig(gain_weight=0.0)).shortcut_m is None  # weight 0
+    # path_weight per metre of shortcut: at an equal known distance of 9 m (shortcuts 8 and 6 m) a positive
+    # weight takes the cluster with the shorter shortcut, a negative weight the one with the longer
+    tie = AssignmentProblem(np.array([[1, 1]], np.int32), clusters, np.array([[9.0, 9.0]]), 1.0, state)
+    assert predicted_terms(None, tie, cfg).shortcut_m.tolist() == [[8.0, 6.0]]  # type: ignore[union-attr]
+    assert PredictiveUtilityPlanner(None, cfg).assign(tie).cluster_of_robot.tolist() == [1]
+    against = GlobalPlanningConfig(gain_weight=0.0, path_weight=-1.0)
+    assert PredictiveUtilityPlanner(None, against).assign(tie).cluster_of_robot.tolist() == [0]

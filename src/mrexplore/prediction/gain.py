@@ -16,7 +16,7 @@ from mrexplore.types import CellState, StateGrid
 if TYPE_CHECKING:
     from mrexplore.prediction.network import MapPredictor
 
-__all__ = ["predicted_gain_m2", "cluster_gains_m2", "BEAM_GAP_M"]
+__all__ = ["predicted_gain_m2", "cluster_gains_m2", "predicted_p_free", "predicted_paths_m", "BEAM_GAP_M"]
 
 BEAM_GAP_M = 0.2
 """Gap between neighbouring beams of a predicted scan at full range, metres (the predictor's cell)."""
@@ -54,6 +54,11 @@ def predicted_gain_m2(
     return _expected_seen(blocked, unknown_p, cells, dirs, range_m / resolution_m, stamp) * resolution_m**2
 
 
+def predicted_p_free(predictor: MapPredictor | None, state: StateGrid, resolution_m: float) -> NDArray[np.float32]:
+    """``predictor``'s completion of ``state`` (None: every unknown cell free)."""
+    return predict_all_free(state, resolution_m) if predictor is None else predictor.p_free(state, resolution_m)
+
+
 def cluster_gains_m2(
     predictor: MapPredictor | None,
     state: StateGrid,
@@ -63,8 +68,39 @@ def cluster_gains_m2(
 ) -> NDArray[np.float64]:
     """``(n,) float64`` :func:`predicted_gain_m2` of each centre on ``predictor``'s completion of ``state``
     (None: every unknown cell free, the gain a plain information-gain heuristic reads)."""
-    p = predict_all_free(state, resolution_m) if predictor is None else predictor.p_free(state, resolution_m)
+    p = predicted_p_free(predictor, state, resolution_m)
     return predicted_gain_m2(state, p, centres_rc, resolution_m, range_m)
+
+
+def predicted_paths_m(
+    state: StateGrid,
+    p_free: NDArray[np.floating],
+    sources_rc: NDArray[np.integer],
+    targets_rc: NDArray[np.integer],
+    resolution_m: float,
+) -> NDArray[np.float64]:
+    """``(n_sources, n_targets) float64`` shortest path lengths, metres, through the cells known free or
+    unknown and predicted free (``p_free >= 0.5``); ``inf`` where none leads.
+
+    Examples
+    --------
+    >>> F, O, U = CellState.FREE, CellState.OCCUPIED, CellState.UNKNOWN
+    >>> g = np.array([[F, U, F],
+    ...               [F, O, F],
+    ...               [F, F, F]], np.uint8)
+    >>> p = np.where(g == U, 0.9, (g == F).astype(float))
+    >>> predicted_paths_m(g, p, np.array([[0, 0]]), np.array([[0, 2]]), 1.0).tolist()  # over the gap
+    [[2.0]]
+    >>> p[0, 1] = 0.1  # predicted a wall: around the pillar, cutting no corner
+    >>> predicted_paths_m(g, p, np.array([[0, 0]]), np.array([[0, 2]]), 1.0).tolist()
+    [[6.0]]
+    """
+    from mrexplore.paths.distance_field import distance_fields
+
+    passable = (state == CellState.FREE) | ((state == CellState.UNKNOWN) & (p_free >= 0.5))
+    targets = np.asarray(targets_rc).reshape(-1, 2)
+    fields = distance_fields(passable, np.asarray(sources_rc).reshape(-1, 2), targets)
+    return np.array([f.at(targets) for f in fields], np.float64).reshape(len(fields), len(targets)) * resolution_m
 
 
 @nb.njit(cache=True, nogil=True)

@@ -17,9 +17,8 @@ from mrexplore.global_planning.classical import utility_cost
 from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs
 from mrexplore.global_planning.learned.numpy_nets import GraphNetNp
-from mrexplore.global_planning.predictive import predicted_cost
+from mrexplore.global_planning.predictive import predicted_cost, predicted_terms
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
-from mrexplore.prediction.gain import cluster_gains_m2
 from mrexplore.prediction.network import MapPredictor
 
 if TYPE_CHECKING:
@@ -210,17 +209,15 @@ class LearnedPlanner:
 
     def _inputs(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64]]:
         """The inputs and the heuristic cost ``(R, C) float64`` under the residual (``inf`` where unreachable)."""
-        gains = None
+        terms = None
         if self.net.cfg.use_predicted_gain or self.gain_cost:
-            centres = problem.clusters.centers_rc
-            gains = cluster_gains_m2(
-                self.predictor, problem.state, centres, problem.resolution_m, self.heuristic.gain_range_m
-            )
-        g = graph_inputs(problem, self.net.cfg, self.heuristic, gains if self.net.cfg.use_predicted_gain else None)
+            terms = predicted_terms(self.predictor, problem, self.heuristic, shortcuts=self.gain_cost)
+        gains = terms.gain_m2 if terms is not None and self.net.cfg.use_predicted_gain else None
+        g = graph_inputs(problem, self.net.cfg, self.heuristic, gains)
         cost = utility_cost(problem, self.heuristic)
         if self.gain_cost:
-            assert gains is not None
-            cost = predicted_cost(problem, gains, self.heuristic)
+            assert terms is not None
+            cost = predicted_cost(problem, terms, self.heuristic)
             base = np.where(g.reachable, -cost / self.net.cfg.base_scale, 0.0).astype(np.float32)
             g = replace(g, base=base)
         return g, cost
