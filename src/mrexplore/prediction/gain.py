@@ -16,7 +16,7 @@ from mrexplore.types import CellState, StateGrid
 if TYPE_CHECKING:
     from mrexplore.prediction.network import MapPredictor
 
-__all__ = ["predicted_gain_m2", "cluster_gains_m2", "predicted_p_free", "predicted_paths_m", "BEAM_GAP_M"]
+__all__ = ["predicted_gain_m2", "predicted_p_free", "predicted_paths_m", "BEAM_GAP_M"]
 
 BEAM_GAP_M = 0.2
 """Gap between neighbouring beams of a predicted scan at full range, metres (the predictor's cell)."""
@@ -57,19 +57,6 @@ def predicted_gain_m2(
 def predicted_p_free(predictor: MapPredictor | None, state: StateGrid, resolution_m: float) -> NDArray[np.float32]:
     """``predictor``'s completion of ``state`` (None: every unknown cell free)."""
     return predict_all_free(state, resolution_m) if predictor is None else predictor.p_free(state, resolution_m)
-
-
-def cluster_gains_m2(
-    predictor: MapPredictor | None,
-    state: StateGrid,
-    centres_rc: NDArray[np.integer],
-    resolution_m: float,
-    range_m: float,
-) -> NDArray[np.float64]:
-    """``(n,) float64`` :func:`predicted_gain_m2` of each centre on ``predictor``'s completion of ``state``
-    (None: every unknown cell free, the gain a plain information-gain heuristic reads)."""
-    p = predicted_p_free(predictor, state, resolution_m)
-    return predicted_gain_m2(state, p, centres_rc, resolution_m, range_m)
 
 
 def predicted_paths_m(

@@ -185,8 +185,8 @@ def test_hier_predict_is_hier_over_the_predictive_cost() -> None:
     from random_problems import random_problem
 
     from mrexplore.config import GlobalPlanningConfig
+    from mrexplore.global_planning.predictive import predicted_terms
     from mrexplore.pipeline import make_strategy
-    from mrexplore.prediction.gain import cluster_gains_m2
     from mrexplore.types import CellState
 
     rng = np.random.default_rng(11)
@@ -196,7 +196,7 @@ def test_hier_predict_is_hier_over_the_predictive_cost() -> None:
     for _ in range(30):
         states = np.array([CellState.FREE, CellState.UNKNOWN, CellState.OCCUPIED], np.uint8)
         problem = replace(random_problem(rng), state=states[rng.choice(3, size=(50, 50), p=[0.5, 0.4, 0.1])])
-        gains = cluster_gains_m2(None, problem.state, problem.clusters.centers_rc, 0.1, 6.0)
+        gains = predicted_terms(None, problem, GlobalPlanningConfig()).gain_m2
         _, cost_hier, _ = hier._cost(problem)
         _, cost_pred, _ = weighted._cost(problem)
         reachable = np.isfinite(cost_hier)
