@@ -38,49 +38,50 @@ def pairs(rows: list[dict[str, str]], focus: str, other: str, metric: str) -> Pa
     return dict(out)
 
 
+Differences = dict[tuple[int, str], tuple[float, float, float]]
+
+
+def differences(rows: list[dict[str, str]], focus: str, other: str, metric: str) -> Differences:
+    """``(team, "dataset class") -> (estimate, low, high)``: :func:`paired_bootstrap` of :func:`pairs`."""
+    return {k: paired_bootstrap(*v) for k, v in pairs(rows, focus, other, metric).items()}
+
+
 def _cell(est: float, lo: float, hi: float) -> str:
     mark = " **behind**" if hi < 0 else ""
     return f"{est:+.1f} [{lo:+.1f}, {hi:+.1f}]{mark}"
 
 
-def table(rows: list[dict[str, str]], focus: str, against: list[str], metric: str) -> tuple[str, int]:
-    """The markdown table of ``focus`` against each of ``against`` by team and group, and how many of its
-    intervals lie wholly below zero."""
-    found = {o: pairs(rows, focus, o, metric) for o in against}
-    keys = sorted({k for p in found.values() for k in p})
+def table(found: dict[str, Differences]) -> tuple[str, int]:
+    """The markdown table of the differences against each strategy of ``found`` by team and group, and how
+    many of its intervals lie wholly below zero."""
+    keys = sorted({k for d in found.values() for k in d})
     groups = sorted({g for _, g in keys})
     lines = [f"| robots | vs | {' | '.join(groups)} |", "| --- | --- |" + " --- |" * len(groups)]
     behind = 0
     for team in sorted({t for t, _ in keys}):
-        for o in against:
-            cells = []
-            for g in groups:
-                if (team, g) not in found[o]:
-                    cells.append("–")
-                    continue
-                est, lo, hi = paired_bootstrap(*found[o][(team, g)])
-                behind += hi < 0
-                cells.append(_cell(est, lo, hi))
+        for o, d in found.items():
+            cells = [_cell(*d[(team, g)]) if (team, g) in d else "–" for g in groups]
+            behind += sum(d[(team, g)][2] < 0 for g in groups if (team, g) in d)
             lines.append(f"| {team} | `{o}` | {' | '.join(cells)} |")
     return "\n".join(lines), behind
 
 
-def figure(rows: list[dict[str, str]], focus: str, against: list[str], out: Path) -> None:
-    """Paired differences against team size, one panel per dataset class, both metrics."""
+def figure(found: dict[tuple[str, str], Differences], focus: str, out: Path) -> None:
+    """Paired differences against team size, one panel per dataset class, one series per (strategy, metric)
+    of ``found``."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    found = {(o, m): pairs(rows, focus, o, m) for o in against for m in METRICS}
-    groups = sorted({g for p in found.values() for _, g in p})
+    groups = sorted({g for d in found.values() for _, g in d})
     fig, axes = plt.subplots(1, len(groups), figsize=(3.6 * len(groups), 3.4), sharey=True, squeeze=False)
     for ax, g in zip(axes[0], groups, strict=True):
-        for j, ((o, m), p) in enumerate(found.items()):
-            teams = sorted(t for t, gg in p if gg == g)
+        for j, ((o, m), d) in enumerate(found.items()):
+            teams = sorted(t for t, gg in d if gg == g)
             if not teams:
                 continue
-            stats = np.array([paired_bootstrap(*p[(t, g)]) for t in teams])
+            stats = np.array([d[(t, g)] for t in teams])
             x = np.array(teams) + (j - (len(found) - 1) / 2) * 0.12
             err = np.abs(stats[:, 1:] - stats[:, :1]).T
             style = "o-" if m == "steps" else "s--"
@@ -122,12 +123,13 @@ def main() -> int:
         "Fewer steps in % of the other's mean, paired by map and seed (positive: "
         f"`{a.focus}` is faster), 95% bootstrap interval; **behind**: the interval lies wholly below zero.",
     ]
+    found = {(o, m): differences(rows, a.focus, o, m) for o in against for m in METRICS}
     for metric, words in METRICS.items():
-        body, behind = table(rows, a.focus, against, metric)
+        body, behind = table({o: found[(o, metric)] for o in against})
         text += ["", f"## Steps {words} ({behind} intervals wholly behind)", "", body]
         print(f"{metric}: {behind} intervals wholly behind")
     (out / "by_team.md").write_text("\n".join(text) + "\n")
-    figure(rows, a.focus, against, out / "by_team.png")
+    figure(found, a.focus, out / "by_team.png")
     print(f"wrote {out / 'by_team.md'} and {out / 'by_team.png'}")
     return 0
 

@@ -41,13 +41,13 @@ def test_pairs_and_table_by_hand(team_sizes) -> None:  # type: ignore[no-untyped
         (1, "dungeon large"): ([90.0, 90.0], [100.0, 100.0]),
         (2, "dungeon large"): ([110.0, 110.0], [100.0, 100.0]),
     }
-    text, behind = team_sizes.table(rows, "hier", ["utility"], "steps")
+    text, behind = team_sizes.table({"utility": team_sizes.differences(rows, "hier", "utility", "steps")})
     assert behind == 1
     assert text.splitlines()[2:] == [
         "| 1 | `utility` | +10.0 [+10.0, +10.0] |",
         "| 2 | `utility` | -10.0 [-10.0, -10.0] **behind** |",
     ]
-    assert team_sizes.table(rows, "hier", ["utility"], "steps_to_99")[1] == 0
+    assert team_sizes.table({"utility": team_sizes.differences(rows, "hier", "utility", "steps_to_99")})[1] == 0
 
 
 def test_a_folder_without_results_is_one_line(tmp_path: Path) -> None:
