@@ -286,7 +286,15 @@ def test_hostile_policy_files(tmp_path, capsys) -> None:
 
 
 @pytest.mark.parametrize(
-    "script", ["profile_decision.py", "step_and_decision.py", "fields.py", "meanshift.py", "predictor_cost.py"]
+    "script",
+    [
+        "profile_decision.py",
+        "step_and_decision.py",
+        "fields.py",
+        "meanshift.py",
+        "predictor_cost.py",
+        "decision_ratio.py",
+    ],
 )
 def test_benchmarks_give_one_line_on_bad_input(script: str) -> None:
     benchmarks = Path(__file__).resolve().parents[1] / "benchmarks"

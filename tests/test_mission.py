@@ -160,6 +160,33 @@ def test_routes_on_threads_give_the_mission_inline_routes_give(small_map, monkey
     assert threaded == inline
 
 
+@pytest.mark.parametrize("strategy", ["hier-predict-heuristic", "hier-predict"])
+def test_a_prediction_started_ahead_on_the_threads_gives_the_mission_inline_gives(
+    small_map, monkeypatch, strategy: str
+) -> None:
+    # The predictive planners start the map prediction when a decision's grid is known, on the threads where
+    # more than one is allowed; every decision takes the one started for its own grid, so every record but
+    # the timings is that of one thread.
+    from mrexplore.global_planning.predictive import PredictionAhead
+
+    taken: list[bool] = []
+    plain = PredictionAhead.take
+
+    def spied(self, predictor, state, resolution_m):
+        taken.append(self._state is state and self._future is not None)
+        return plain(self, predictor, state, resolution_m)
+
+    monkeypatch.setattr(PredictionAhead, "take", spied)
+    runs = []
+    for threads in ("1", "2"):
+        monkeypatch.setenv("MREXPLORE_THREADS", threads)
+        spec = MissionSpec(small_map, make_strategy(strategy), SimConfig(robots=3), seed=4)
+        runs.append(run_mission(spec).measures.to_dict())
+    assert taken and all(taken)  # each decision took the prediction started for its grid
+    one, two = ({k: v for k, v in r.items() if k not in TIMING_KEYS} for r in runs)
+    assert two == one
+
+
 def test_baseline_bytes_counted_on_threads_equal_those_counted_inline(small_map, monkeypatch) -> None:
     # Table II's baseline grids are compressed on the threads where more than one is allowed: the byte
     # counts, and every other record but the timings, are those of one thread.

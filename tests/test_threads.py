@@ -1,4 +1,4 @@
-"""The shared thread pool: inline when one thread is allowed, the setting validated."""
+"""The shared thread pool: inline when one thread is allowed, the setting validated, calls started beside the caller."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import threading
 
 import pytest
 
-from mrexplore.threads import THREADS_ENV, map_threads, thread_count
+from mrexplore.threads import THREADS_ENV, map_threads, start_thread, thread_count
 from mrexplore.types import MrExploreError
 
 
@@ -26,3 +26,18 @@ def test_bad_setting_refused(monkeypatch: pytest.MonkeyPatch, text: str) -> None
     monkeypatch.setenv(THREADS_ENV, text)
     with pytest.raises(MrExploreError, match=rf"^MREXPLORE_THREADS must be an integer >= 1, got '{text}'; unset it"):
         thread_count()
+
+
+@pytest.mark.parametrize(("threads", "inline"), [("1", True), ("2", False)])
+def test_a_started_call_runs_beside_the_caller_or_inline(
+    monkeypatch: pytest.MonkeyPatch, threads: str, inline: bool
+) -> None:
+    monkeypatch.setenv(THREADS_ENV, threads)
+    future = start_thread(lambda: threading.current_thread().name)
+    assert (future.result() == "MainThread") is inline
+
+    def fails() -> None:
+        raise ValueError("bad map")
+
+    with pytest.raises(ValueError, match="^bad map$"):  # the exception comes from the future either way
+        start_thread(fails).result()

@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from conftest import state_grid
 
 from mrexplore.config import GlobalPlanningConfig
-from mrexplore.global_planning.predictive import PredictiveUtilityPlanner, predicted_terms
+from mrexplore.global_planning.predictive import PredictionAhead, PredictiveUtilityPlanner, predicted_terms
 from mrexplore.global_planning.protocol import AssignmentProblem
 from mrexplore.prediction.baselines import predict_all_free
 from mrexplore.prediction.gain import predicted_gain_m2
+from mrexplore.prediction.network import MapPredictor, UNetNp, layer_shapes
 from mrexplore.preprocessing.clustering import Clusters
 from mrexplore.types import CellState
 
@@ -84,3 +87,39 @@ def test_the_predicted_shortcut_is_the_known_path_less_the_predicted_one() -> No
     assert PredictiveUtilityPlanner(None, cfg).assign(tie).cluster_of_robot.tolist() == [1]
     against = GlobalPlanningConfig(gain_weight=0.0, path_weight=-1.0)
     assert PredictiveUtilityPlanner(None, against).assign(tie).cluster_of_robot.tolist() == [0]
+
+
+def _constant_predictor(logit: float) -> MapPredictor:
+    """A predictor whose network gives ``logit`` on every cell (its weights 0, the head's bias ``logit``)."""
+    state = {}
+    for name, (o, i, k) in layer_shapes(1).items():
+        state[f"{name}.weight"] = np.zeros((o, i, k, k), np.float32)
+        state[f"{name}.bias"] = np.full(o, logit if name == "head" else 0.0, np.float32)
+    return MapPredictor(UNetNp(1, state), 0.2, Path("constant.npz"), "", {})
+
+
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_a_prediction_started_ahead_is_taken_for_its_own_grid_only(monkeypatch, threads: str) -> None:
+    """The completion started for the problem's own grid array is the one taken; one started for another
+    array (here a belief with the east end seen) is passed over and the problem's grid completed anew."""
+    monkeypatch.setenv("MREXPLORE_THREADS", threads)
+    pred = _constant_predictor(-2.0)  # unknown cells near known ones: p = 0.119
+    state = state_grid(BELIEF)
+    other = state.copy()
+    other[1, 9:] = CellState.FREE
+    ahead = PredictionAhead()
+    ahead.start(pred, other, 1.0)
+    taken = ahead.take(pred, state, 1.0)  # the problem's grid, not the one started
+    assert taken[1, 10] == pytest.approx(1 / (1 + np.exp(2.0)))
+    ahead.start(pred, other, 1.0)
+    assert ahead.take(pred, other, 1.0)[1, 10] == 1.0  # the one started for this very array
+    assert ahead.take(pred, other, 1.0)[1, 10] == 1.0  # nothing left started: computed now, the same
+    clusters = Clusters(np.array([[1, 2], [1, 8]], np.int32), np.array([1, 1], np.int32), np.zeros((2, 2), np.int32),
+                        np.zeros(2, np.int32))  # fmt: skip
+    problem = AssignmentProblem(np.array([[1, 5]], np.int32), clusters, np.array([[3.0, 3.0]]), 1.0, state)
+    cfg = GlobalPlanningConfig(gain_weight=1.0, gain_range_m=2.0)
+    planner = PredictiveUtilityPlanner(pred, cfg)
+    planner.begin(other, 1.0)  # started on a stale grid: the answer is still the problem's own
+    want = predicted_terms(pred, problem, cfg).gain_m2
+    assert predicted_terms(pred, problem, cfg, ahead=planner.ahead).gain_m2.tolist() == want.tolist()
+    assert want[1] == pytest.approx(1 / (1 + np.exp(2.0)))  # east: (1, 9) at p = 0.119 stops the beam (0 on other)

@@ -15,9 +15,12 @@ from mrexplore.prediction.network import (
     MapPredictor,
     UNetNp,
     _conv,
+    _conv_up_and_skip,
+    _Scratch,
     belief_channels,
     layer_shapes,
     load_predictor,
+    phase_weights,
 )
 from mrexplore.types import CellState, MrExploreError
 from mrexplore.weights_archive import write_weights_archive
@@ -39,12 +42,57 @@ def _reference_conv(x: np.ndarray, w: np.ndarray, b: np.ndarray, dilation: int) 
 
 
 @pytest.mark.parametrize("dilation", [1, 2, 4])
-def test_the_convolution_is_a_plain_cross_correlation_with_zero_padding(dilation: int) -> None:
+@pytest.mark.parametrize("channels", [3, 17])  # stacked copies below 16 input channels, shifted products above
+def test_the_convolution_is_a_plain_cross_correlation_with_zero_padding(dilation: int, channels: int) -> None:
     rng = np.random.default_rng(dilation)
-    x = rng.normal(size=(3, 7, 9)).astype(np.float32)
-    w = rng.normal(size=(2, 3, 3, 3)).astype(np.float32)
+    x = rng.normal(size=(channels, 7, 9)).astype(np.float32)
+    w = rng.normal(size=(2, channels, 3, 3)).astype(np.float32)
     b = rng.normal(size=2).astype(np.float32)
-    np.testing.assert_allclose(_conv(x, w, b, dilation), _reference_conv(x, w, b, dilation), atol=1e-5)
+    np.testing.assert_allclose(_conv(x, w, b, dilation), _reference_conv(x, w, b, dilation), atol=1e-4)
+
+
+@pytest.mark.parametrize(("coarse_ch", "skip_ch"), [(2, 1), (17, 3)])
+def test_the_decoder_convolution_equals_one_over_the_upsampled_grid_stacked_on_the_skip(
+    coarse_ch: int, skip_ch: int
+) -> None:
+    """Four 2 x 2 convolutions of the coarse grid, one per parity of row and column, give what the 3 x 3
+    convolution gives on the grid upsampled by repeating each cell, borders included."""
+    rng = np.random.default_rng(coarse_ch)
+    coarse = rng.normal(size=(coarse_ch, 3, 5)).astype(np.float32)
+    skip = rng.normal(size=(skip_ch, 6, 10)).astype(np.float32)
+    w = rng.normal(size=(4, coarse_ch + skip_ch, 3, 3)).astype(np.float32)
+    b = rng.normal(size=4).astype(np.float32)
+    stacked = np.concatenate([coarse.repeat(2, axis=1).repeat(2, axis=2), skip])
+    want = _reference_conv(stacked, w, b, 1)
+    w_skip = np.ascontiguousarray(w[:, coarse_ch:])
+    got = _conv_up_and_skip(coarse, skip, phase_weights(w[:, :coarse_ch]), w_skip, b, _Scratch(), "dec")
+    np.testing.assert_allclose(got, want, atol=1e-4)
+
+
+def test_the_phase_weights_of_a_tap_pattern_add_as_counted_by_hand() -> None:
+    """One input and output channel, tap (i, j) weighing 10 ** (3 * i + j): phase (0, 0) reads coarse offsets
+    -1 and 0 in both axes, its offset (0, 0) summing the four taps (1, 1), (1, 2), (2, 1), (2, 2)."""
+    w = (10.0 ** np.arange(9)).reshape(1, 1, 3, 3).astype(np.float32)
+    k = phase_weights(w).reshape(2, 2, 2, 2)  # phase row, phase column, coarse offset u, v
+    assert k[0, 0, 0, 0] == 1  # tap (0, 0) alone reads offset (-1, -1)
+    assert k[0, 0, 1, 1] == 1e4 + 1e5 + 1e7 + 1e8
+    assert k[1, 1, 0, 0] == 1 + 10 + 1e3 + 1e4  # phase (1, 1), offset (0, 0): taps rows 0-1, columns 0-1
+    assert k[1, 1, 1, 1] == 1e8  # tap (2, 2) alone reads offset (+1, +1)
+    assert k.sum(axis=(2, 3)).tolist() == [[w.sum()] * 2] * 2  # every phase uses every tap once
+
+
+def test_the_network_answers_alike_whatever_grids_it_ran_on_before() -> None:
+    """The forward pass keeps its arrays between calls: a grid after a larger and a smaller one gets what a
+    fresh network gives it, and an answer already given is not overwritten by the next call."""
+    rng = np.random.default_rng(5)
+    state = {k: rng.normal(scale=0.3, size=v.shape).astype(np.float32) for k, v in _zero_state(2).items()}
+    x_small, x_large = (rng.random((3, h, w)).astype(np.float32) for h, w in ((8, 12), (16, 20)))
+    fresh_small, fresh_large = UNetNp(2, state)(x_small), UNetNp(2, state)(x_large)
+    net = UNetNp(2, state)
+    first = net(x_large)
+    np.testing.assert_array_equal(net(x_small), fresh_small)
+    np.testing.assert_array_equal(net(x_large), fresh_large)
+    np.testing.assert_array_equal(first, fresh_large)
 
 
 def test_the_input_pools_states_into_shares_and_pads_with_unknown() -> None:

@@ -31,7 +31,7 @@ TINY = PredictorTrainConfig(
 )  # fmt: skip
 
 
-@pytest.mark.parametrize("width", [1, 3])
+@pytest.mark.parametrize("width", [1, 3, 8])  # 8: the shipped width, whose wide layers take the shifted products
 def test_the_numpy_network_computes_what_the_torch_one_does(width: int) -> None:
     torch.manual_seed(width)
     net = PredictorUNet(width)

@@ -87,7 +87,13 @@ class Assignment:
 
 @runtime_checkable
 class GlobalPlanner(Protocol):
-    """Assigns frontier clusters to robots; classical and learned planners alike."""
+    """Assigns frontier clusters to robots; classical and learned planners alike.
+
+    A planner that reads more of the grid than the problem holds may also define ``begin(state,
+    resolution_m)``: a pipeline calls it with its decision's grid before it poses the problem, so that work
+    can start beside the clustering and the distance searches (the predictive planners start their map
+    prediction there).
+    """
 
     name: str
 

@@ -213,6 +213,11 @@ class ExplorationPipeline:
         state, robots_rc, resolution_m, current = inp.state, inp.robots_rc, inp.resolution_m, inp.current
         frontiers = inp.frontiers if inp.frontiers is not None else detect_frontiers(state)
         planning = self.planning_state(state)
+        begin = getattr(self.planner, "begin", None)
+        if own_planner and begin is not None:
+            # A planner that reads more of the grid than the problem holds (a map prediction) starts on it now,
+            # beside the clustering and the distance searches below.
+            begin(planning, resolution_m)
         passable = planning == CellState.FREE
         computed: list[list[RobotField]] = []
         box, far = self._extent(passable, resolution_m)

@@ -18,6 +18,8 @@ if TYPE_CHECKING:
 
 __all__ = ["predicted_gain_m2", "predicted_p_free", "predicted_paths_m", "BEAM_GAP_M"]
 
+_UNKNOWN = int(CellState.UNKNOWN)
+
 BEAM_GAP_M = 0.2
 """Gap between neighbouring beams of a predicted scan at full range, metres (the predictor's cell)."""
 
@@ -47,11 +49,12 @@ def predicted_gain_m2(
     [1.25]
     """
     blocked = np.ascontiguousarray(p_free < 0.5)
-    unknown_p = np.ascontiguousarray(np.where(state == CellState.UNKNOWN, p_free, 0.0), dtype=np.float64)
+    state = np.ascontiguousarray(state, np.uint8)
+    p_free = np.ascontiguousarray(p_free)
     dirs = ray_directions(ray_count(range_m, 1.0 / beam_gap_m))
     cells = np.ascontiguousarray(np.asarray(cells_rc, np.int64).reshape(-1, 2))
     stamp = np.zeros(state.shape, np.int32)
-    return _expected_seen(blocked, unknown_p, cells, dirs, range_m / resolution_m, stamp) * resolution_m**2
+    return _expected_seen(blocked, state, p_free, cells, dirs, range_m / resolution_m, stamp) * resolution_m**2
 
 
 def predicted_p_free(predictor: MapPredictor | None, state: StateGrid, resolution_m: float) -> NDArray[np.float32]:
@@ -93,14 +96,15 @@ def predicted_paths_m(
 @nb.njit(cache=True, nogil=True)
 def _expected_seen(
     blocked: np.ndarray,
-    unknown_p: np.ndarray,
+    state: np.ndarray,
+    p_free: np.ndarray,
     cells: np.ndarray,
     dirs: np.ndarray,
     range_cells: float,
     stamp: np.ndarray,
 ) -> np.ndarray:  # pragma: no cover - numba
-    """Per cell of ``cells``: the sum of ``unknown_p`` over the cells its beams reach, each once (``stamp``
-    marks the cells a scan counted with the scan's number)."""
+    """Per cell of ``cells``: the sum of ``p_free`` over the unknown cells (by ``state``) its beams reach,
+    each once (``stamp`` marks the cells a scan counted with the scan's number)."""
     out = np.zeros(cells.shape[0])
     buf_len = int(4 * range_cells) + 8
     buf_r = np.empty(buf_len, np.int64)
@@ -114,6 +118,7 @@ def _expected_seen(
                 r, c = buf_r[i], buf_c[i]
                 if stamp[r, c] != k + 1:
                     stamp[r, c] = k + 1
-                    total += unknown_p[r, c]
+                    if state[r, c] == _UNKNOWN:
+                        total += p_free[r, c]
         out[k] = total
     return out

@@ -17,9 +17,10 @@ from mrexplore.global_planning.classical import utility_cost
 from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs
 from mrexplore.global_planning.learned.numpy_nets import GraphNetNp
-from mrexplore.global_planning.predictive import predicted_cost, predicted_terms
+from mrexplore.global_planning.predictive import PredictionAhead, predicted_cost, predicted_terms
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 from mrexplore.prediction.network import MapPredictor
+from mrexplore.types import StateGrid
 
 if TYPE_CHECKING:
     from torch import Tensor
@@ -188,6 +189,7 @@ class LearnedPlanner:
     """Deterministic decisions of a smaller team take the heuristic cost alone, without the residual (the
     strategies set it from :attr:`~mrexplore.config.GlobalPlanningConfig.learned_min_robots`; sampling and
     recording for training always add it)."""
+    ahead: PredictionAhead = field(default_factory=PredictionAhead, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if isinstance(self.net, GraphNetNp):
@@ -203,6 +205,12 @@ class LearnedPlanner:
         if torch.get_num_threads() != 1:
             torch.set_num_threads(1)
 
+    def begin(self, state: StateGrid, resolution_m: float) -> None:
+        """Start predicting ``state``, the grid of the problem that :meth:`assign` will get next (where this
+        planner reads a prediction)."""
+        if self.net.cfg.use_predicted_gain or self.gain_cost:
+            self.ahead.start(self.predictor, state, resolution_m)
+
     def inputs(self, problem: AssignmentProblem) -> GraphInputs:
         """The network's inputs at ``problem`` (the predicted gains among them where the policy reads them)."""
         return self._inputs(problem)[0]
@@ -211,7 +219,7 @@ class LearnedPlanner:
         """The inputs and the heuristic cost ``(R, C) float64`` under the residual (``inf`` where unreachable)."""
         terms = None
         if self.net.cfg.use_predicted_gain or self.gain_cost:
-            terms = predicted_terms(self.predictor, problem, self.heuristic, shortcuts=self.gain_cost)
+            terms = predicted_terms(self.predictor, problem, self.heuristic, self.gain_cost, self.ahead)
         gains = terms.gain_m2 if terms is not None and self.net.cfg.use_predicted_gain else None
         g = graph_inputs(problem, self.net.cfg, self.heuristic, gains)
         cost = utility_cost(problem, self.heuristic)
