@@ -149,6 +149,12 @@ def test_known_cells_keep_their_state_and_far_unknown_cells_are_free() -> None:
     assert (p[:, 3 + reach + 8 :] == 1.0).all()  # beyond the box the network ran on (+ one pooling step)
 
 
+def test_a_belief_with_nothing_known_is_predicted_free_everywhere() -> None:
+    pred = MapPredictor(UNetNp(2, _zero_state(2, head_bias=-2.0)), 0.2, Path("x.npz"), "", {})
+    p = pred.p_free(np.full((5, 6), CellState.UNKNOWN, np.uint8), 0.1)
+    assert p.dtype == np.float32 and (p == 1.0).all()  # no known cell: no box the network runs on
+
+
 def test_a_predictor_file_round_trips(tmp_path: Path) -> None:
     path = tmp_path / "p.npz"
     write_weights_archive(path, {"format": PREDICTOR_FORMAT, "width": 2, "cell_m": 0.2}, _zero_state(2, 1.0))

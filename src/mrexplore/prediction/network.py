@@ -437,8 +437,8 @@ class MapPredictor:
         factor = pool_factor(resolution_m, self.cell_m)
         state = np.ascontiguousarray(state, np.uint8)
         rmin, rmax, cmin, cmax = _known_box(state)
-        if rmin > rmax:  # nothing known: no box to run the network on
-            return known_p_free(state)
+        if rmin > rmax:  # nothing known: no box to run the network on, every cell unknown and far
+            return np.ones(state.shape, np.float32)
         step = factor * 2**POOL_LEVELS
         reach = round(REACH_M / resolution_m)
         r0, c0 = max(0, rmin - reach) // step * step, max(0, cmin - reach) // step * step
