@@ -122,7 +122,7 @@ class PredictiveUtilityPlanner:
     predictor: MapPredictor | None
     cfg: GlobalPlanningConfig = field(default_factory=GlobalPlanningConfig)
     name: str = "predict-utility"
-    ahead: PredictionAhead = field(default_factory=PredictionAhead, repr=False, compare=False)
+    ahead: PredictionAhead = field(default_factory=PredictionAhead, init=False, repr=False, compare=False)
 
     def begin(self, state: StateGrid, resolution_m: float) -> None:
         """Start predicting ``state``, the grid of the problem that :meth:`assign` will get next."""

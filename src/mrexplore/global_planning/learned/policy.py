@@ -189,7 +189,7 @@ class LearnedPlanner:
     """Deterministic decisions of a smaller team take the heuristic cost alone, without the residual (the
     strategies set it from :attr:`~mrexplore.config.GlobalPlanningConfig.learned_min_robots`; sampling and
     recording for training always add it)."""
-    ahead: PredictionAhead = field(default_factory=PredictionAhead, repr=False, compare=False)
+    ahead: PredictionAhead = field(default_factory=PredictionAhead, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if isinstance(self.net, GraphNetNp):
