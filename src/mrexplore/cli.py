@@ -280,8 +280,8 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FILE|none",
         help="alone: train the map predictor instead (predictor.npz, beliefs.npz, checkpoints, log.csv, "
         "curve.png) from beliefs of missions on the training maps, the truth as the label (reads the predictor "
-        "and sim sections); with FILE or none: the map predictor of a policy that reads the predicted gain "
-        "(train.learned.use_predicted_gain; default: the shipped one)",
+        "and sim sections); with FILE or none: the map predictor of a policy that reads a prediction "
+        "(train.learned.use_predicted_gain or use_predicted_path; default: the shipped one)",
     )
     tr.add_argument(
         "--strategy",
@@ -739,10 +739,11 @@ def _train(args: argparse.Namespace) -> str:
         raise MrExploreError(f"--minutes must be > 0, got {args.minutes}")
     if args.predictor == TRAIN_PREDICTOR:
         return _train_predictor(args, run)
-    if args.predictor is not None and not (run.train.strategy == "hier" and run.train.learned.use_predicted_gain):
+    if args.predictor is not None and not (run.train.strategy == "hier" and run.train.learned.reads_prediction):
         raise MrExploreError(
-            f"--predictor {args.predictor} is for a hier policy that reads the predicted gain; set "
-            "train.learned.use_predicted_gain: true in --config, or give --predictor alone to train a predictor"
+            f"--predictor {args.predictor} is for a hier policy that reads a prediction; set "
+            "train.learned.use_predicted_gain or use_predicted_path: true in --config, or give --predictor alone "
+            "to train a predictor"
         )
     if args.strategy is not None:
         run = replace(run, train=replace(run.train, strategy=args.strategy))

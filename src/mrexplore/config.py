@@ -641,6 +641,15 @@ class LearnedConfig(_Checked):
     is predicted to see on the map predictor's completion of the belief, m^2 / ``gain_scale_m2``."""
     gain_scale_m2: float = 10.0
     """The predicted gain is divided by this before entering the network, m^2."""
+    use_predicted_path: bool = False
+    """Edge feature (after the predicted gain where both are read, for a policy trained with it): robot i's
+    predicted shortcut to cluster k, how much shorter its path is through predicted free space (known free
+    cells and unknown ones predicted free) than through known free space, metres / ``distance_scale_m``."""
+
+    @property
+    def reads_prediction(self) -> bool:
+        """The network reads a map predictor's completion of the belief (gain or shortcut)."""
+        return self.use_predicted_gain or self.use_predicted_path
 
     _constraints = {
         "hidden": Interval(4, 1024),

@@ -123,3 +123,20 @@ def test_a_prediction_started_ahead_is_taken_for_its_own_grid_only(monkeypatch, 
     want = predicted_terms(pred, problem, cfg).gain_m2
     assert predicted_terms(pred, problem, cfg, ahead=planner.ahead).gain_m2.tolist() == want.tolist()
     assert want[1] == pytest.approx(1 / (1 + np.exp(2.0)))  # east: (1, 9) at p = 0.119 stops the beam (0 on other)
+
+
+def test_a_policy_that_reads_the_predicted_shortcut_gets_the_loops_six_metres() -> None:
+    """The loop above, seen by a policy trained with ``use_predicted_path``: robot (1, 1)'s shortcut to the
+    cluster at (1, 4) is 6 m, over the 10 m distance scale, and none to (1, 2)."""
+    from mrexplore.config import LearnedConfig
+    from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS
+    from mrexplore.global_planning.learned.network import MultiGraphNet
+    from mrexplore.global_planning.learned.policy import LearnedPlanner
+
+    state = state_grid(LOOP)
+    clusters = Clusters(np.array([[1, 2], [1, 4]], np.int32), np.array([1, 1], np.int32), np.zeros((2, 2), np.int32),
+                        np.zeros(2, np.int32))  # fmt: skip
+    problem = AssignmentProblem(np.array([[1, 1]], np.int32), clusters, np.array([[1.0, 9.0]]), 1.0, state)
+    net = MultiGraphNet(LearnedConfig(hidden=4, blocks=1, use_predicted_path=True), VALUE_INPUTS)
+    edges = LearnedPlanner(net).inputs(problem).edges
+    assert edges.shape == (1, 2, 6) and edges[..., 5].tolist() == [[0.0, pytest.approx(0.6)]]

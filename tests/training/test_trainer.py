@@ -292,3 +292,23 @@ def test_a_policy_that_reads_the_predicted_gain_trains_searches_six_weights_and_
     hier = make_strategy("hier", policy=str(run.policy_path), predictor="none")
     assert hier.predictor == {"path": "none", "sha256": ""} and hier.planner.predictor is None
     assert make_strategy("hier").predictor is None  # the shipped policy reads no prediction
+
+
+def test_a_policy_that_reads_the_predicted_shortcut_trains_and_explores(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    from mrexplore.config import LearnedConfig, MapConfig, SimConfig
+    from mrexplore.maps.loaders import load_map
+    from mrexplore.mission import MissionSpec, run_mission
+    from mrexplore.pipeline import make_strategy
+
+    cfg = replace(TINY, search_generations=1, search_population=2, search_elites=1, search_episodes=1)
+    cfg = replace(cfg, dagger_rounds=0, ppo_iterations=0, learned=LearnedConfig(use_predicted_path=True))
+    run = train(cfg, tmp_path / "run", None, workers=1, seed=2, predictor="none")
+    policy = load_policy(run.policy_path)
+    assert len(policy.net.edge_weights) == 6 and policy.net.cfg.use_predicted_path
+    assert not policy.net.cfg.use_predicted_gain
+    hier = make_strategy("hier", policy=str(run.policy_path), predictor="none")
+    assert hier.predictor == {"path": "none", "sha256": ""}
+    out = run_mission(MissionSpec(load_map("generated:3", MapConfig(resolution_m=0.2)), hier, SimConfig(robots=2)))
+    assert out.measures.coverage > 0.9

@@ -129,7 +129,7 @@ def _reads_prediction(policy: str | None) -> bool:
     from mrexplore.global_planning.learned.policy_file import HIER_FORMAT, hier_config, read_policy_file
 
     try:
-        return hier_config(read_policy_file(Path(policy) if policy else None, HIER_FORMAT))[0].use_predicted_gain
+        return hier_config(read_policy_file(Path(policy) if policy else None, HIER_FORMAT))[0].reads_prediction
     except (MrExploreError, KeyError, TypeError, ValueError):
         return False
 

@@ -83,12 +83,13 @@ def predicted_terms(
     predictor: MapPredictor | None,
     problem: AssignmentProblem,
     cfg: GlobalPlanningConfig,
-    shortcuts: bool = True,
+    shortcuts: bool | None = None,
     ahead: PredictionAhead | None = None,
 ) -> PredictedTerms:
-    """The predicted gain of every cluster and, where ``shortcuts`` and ``cfg.path_weight`` is not 0, the
-    predicted shortcuts, both on one completion of the problem's grid (``predictor`` None: every unknown
-    cell free); ``ahead``: the completion started before the problem was posed, where it was."""
+    """The predicted gain of every cluster and the predicted shortcuts, both on one completion of the
+    problem's grid (``predictor`` None: every unknown cell free); the shortcuts where ``shortcuts`` is True,
+    or where it is None and ``cfg.path_weight`` is not 0. ``ahead``: the completion started before the problem
+    was posed, where it was."""
     centres = problem.clusters.centers_rc
     if ahead is not None:
         p = ahead.take(predictor, problem.state, problem.resolution_m)
@@ -96,7 +97,7 @@ def predicted_terms(
         p = _locked_p_free(predictor, problem.state, problem.resolution_m)
     gains = predicted_gain_m2(problem.state, p, centres, problem.resolution_m, cfg.gain_range_m)
     shortcut = None
-    if shortcuts and cfg.path_weight != 0.0 and problem.n_clusters:
+    if (cfg.path_weight != 0.0 if shortcuts is None else shortcuts) and problem.n_clusters:
         known = problem.dist_m
         predicted = predicted_paths_m(problem.state, p, problem.robots_rc, centres, problem.resolution_m)
         both = np.isfinite(known) & np.isfinite(predicted)

@@ -256,7 +256,7 @@ def _hier(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
     from mrexplore.global_planning.learned.policy import LearnedPlanner
 
     net, info = _loaded_policy("hier", policy)
-    predictor, predictor_info = loaded_predictor(c.predictor) if net.cfg.use_predicted_gain else (None, None)
+    predictor, predictor_info = loaded_predictor(c.predictor) if net.cfg.reads_prediction else (None, None)
     planner = LearnedPlanner(net, c.global_, predictor=predictor, min_robots=c.global_.learned_min_robots)
     router = LocalRouter(c.local, c.preprocess)
     commitment = _commitment(c.global_, 1.0)

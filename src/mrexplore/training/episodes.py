@@ -128,8 +128,8 @@ def _predictor(spec: str | None) -> MapPredictor | None:
 
 
 def _planner(job: EpisodeJob, net: MultiGraphNet, **kw: Any) -> LearnedPlanner:
-    """The job's learned planner, with its map predictor where the network reads the predicted gain."""
-    predictor = _predictor(job.predictor) if net.cfg.use_predicted_gain else None
+    """The job's learned planner, with its map predictor where the network reads a prediction."""
+    predictor = _predictor(job.predictor) if net.cfg.reads_prediction else None
     return LearnedPlanner(net, predictor=predictor, **kw)
 
 

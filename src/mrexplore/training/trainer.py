@@ -194,7 +194,7 @@ def train(
         return [replace(j, sim=sim, mission=mission, predictor=predictor) for j in jobs]
 
     predictor_info = None
-    if cfg.strategy == "hier" and cfg.learned.use_predicted_gain:
+    if cfg.strategy == "hier" and cfg.learned.reads_prediction:
         from mrexplore.pipeline.registry import loaded_predictor
 
         predictor_info = loaded_predictor(predictor)[1]  # a file that cannot be read fails before any work

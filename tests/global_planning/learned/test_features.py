@@ -61,3 +61,15 @@ def test_a_policy_that_reads_the_predicted_gain_gets_it_as_a_sixth_edge_feature(
     with pytest.raises(ValueError, match=r"needs one per cluster \(3\), got None"):
         graph_inputs(_problem(), cfg, GlobalPlanningConfig())
     assert graph_inputs(_problem(), LearnedConfig(), GlobalPlanningConfig()).edges.shape == (2, 3, 5)
+
+
+def test_a_policy_that_reads_the_predicted_shortcut_gets_it_per_pair_after_the_gain() -> None:
+    shortcut = np.array([[0.0, 6.0, 500.0], [2.0, 0.0, 0.0]])  # metres; the scale is distance_scale_m (2 m here)
+    for gain, at in ((False, 5), (True, 6)):
+        cfg = LearnedConfig(distance_scale_m=2.0, use_predicted_gain=gain, use_predicted_path=True)
+        gains = np.zeros(3) if gain else None
+        g = graph_inputs(_problem(), cfg, GlobalPlanningConfig(), gain_m2=gains, shortcut_m=shortcut)
+        assert g.edges.shape == (2, 3, at + 1)
+        assert g.edges[..., at].tolist() == [[0.0, 3.0, 10.0], [1.0, 0.0, 0.0]]  # per robot, clipped at 10
+    with pytest.raises(ValueError, match=r"needs one per robot and cluster \(2, 3\), got None"):
+        graph_inputs(_problem(), LearnedConfig(use_predicted_path=True), GlobalPlanningConfig())

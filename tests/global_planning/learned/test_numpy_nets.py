@@ -53,18 +53,22 @@ def test_the_mgnn_residual_equals_torch_on_random_decisions() -> None:
         np.testing.assert_allclose(mirror.residual(g), want, rtol=1e-4, atol=1e-5)
 
 
-def test_a_network_that_reads_the_predicted_gain_equals_torch() -> None:
+@pytest.mark.parametrize("path", [False, True])
+def test_a_network_that_reads_the_predicted_gain_equals_torch(path: bool) -> None:
     torch.manual_seed(3)
-    net = MultiGraphNet(LearnedConfig(hidden=16, blocks=1, use_predicted_gain=True), VALUE_INPUTS).eval()
+    cfg = LearnedConfig(hidden=16, blocks=1, use_predicted_gain=True, use_predicted_path=path)
+    net = MultiGraphNet(cfg, VALUE_INPUTS).eval()
+    weights = [-1.0, 0.5, -0.3, 0.2, 0.1, 0.7] + [0.4] * path
     with torch.no_grad():
         torch.nn.init.normal_(net.score[-1].weight, std=0.5)
-        net.set_edge_weights([-1.0, 0.5, -0.3, 0.2, 0.1, 0.7])
+        net.set_edge_weights(weights)
     mirror = GraphNetNp(net.cfg, _numpy_state(net))
-    assert mirror.edge_weights.tolist() == pytest.approx([-1.0, 0.5, -0.3, 0.2, 0.1, 0.7])
+    assert mirror.edge_weights.tolist() == pytest.approx(weights)
     rng = np.random.default_rng(7)
     for _ in range(20):
         p = _random_problem(rng)
-        g = graph_inputs(p, net.cfg, LearnedPlanner(net).heuristic, rng.uniform(0, 30, p.n_clusters))
+        shortcut = rng.uniform(0, 20, (p.n_robots, p.n_clusters)) if path else None
+        g = graph_inputs(p, net.cfg, LearnedPlanner(net).heuristic, rng.uniform(0, 30, p.n_clusters), shortcut)
         with torch.no_grad():
             batch = collate([g])
             want = net.residual(*net.encode(batch), batch)[0, : g.n_robots, : g.n_clusters].numpy()

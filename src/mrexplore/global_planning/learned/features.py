@@ -20,7 +20,8 @@ CLUSTER_FEATURES = 4
 EDGE_FEATURES = 5
 """d_ik, g_ik (paper eq. 7's f_edge inputs), advantage, current goal, isolation (switchable, see
 :class:`~mrexplore.config.LearnedConfig`); a switched-off feature is zero. A policy trained with
-``use_predicted_gain`` reads a sixth (:func:`edge_feature_count`)."""
+``use_predicted_gain`` reads the predicted gain next, one trained with ``use_predicted_path`` the predicted
+shortcut after it (:func:`edge_feature_count`)."""
 _FAR = 10.0
 """Normalised distances are clipped to [-_FAR, _FAR] (unreachable pairs are masked anyway)."""
 
@@ -59,8 +60,9 @@ class GraphInputs:
 
 
 def edge_feature_count(cfg: LearnedConfig) -> int:
-    """Edge features of a network with ``cfg``: :data:`EDGE_FEATURES`, and the predicted gain where used."""
-    return EDGE_FEATURES + int(cfg.use_predicted_gain)
+    """Edge features of a network with ``cfg``: :data:`EDGE_FEATURES`, then the predicted gain and the
+    predicted shortcut where used."""
+    return EDGE_FEATURES + int(cfg.use_predicted_gain) + int(cfg.use_predicted_path)
 
 
 def graph_inputs(
@@ -68,9 +70,11 @@ def graph_inputs(
     cfg: LearnedConfig,
     heuristic: GlobalPlanningConfig,
     gain_m2: NDArray[np.float64] | None = None,
+    shortcut_m: NDArray[np.float64] | None = None,
 ) -> GraphInputs:
     """Nodes, edges and masks of one decision, every distance in metres divided by ``cfg.distance_scale_m``;
-    ``gain_m2`` ``(n_clusters,)``: the predicted gain of each cluster (needed where ``cfg`` uses it).
+    ``gain_m2`` ``(n_clusters,)``: the predicted gain of each cluster, ``shortcut_m`` ``(n_robots,
+    n_clusters)``: each robot's predicted shortcut to each cluster (each needed where ``cfg`` uses it).
 
     Examples
     --------
@@ -125,6 +129,12 @@ def graph_inputs(
         if gain_m2 is None or len(gain_m2) != C:
             raise ValueError(f"a network that reads the predicted gain needs one per cluster ({C}), got {gain_m2!r}")
         edges[..., EDGE_FEATURES] = np.minimum(np.asarray(gain_m2) / cfg.gain_scale_m2, _FAR)[None, :]
+    if cfg.use_predicted_path:
+        if shortcut_m is None or np.shape(shortcut_m) != (R, C):
+            need = f"one per robot and cluster ({R}, {C})"
+            raise ValueError(f"a network that reads the predicted shortcut needs {need}, got {shortcut_m!r}")
+        at = EDGE_FEATURES + int(cfg.use_predicted_gain)
+        edges[..., at] = np.minimum(np.asarray(shortcut_m) / ds, _FAR)
     cost = utility_cost(problem, heuristic)
     base = np.where(reachable, -cost / cfg.base_scale, 0.0).astype(np.float32)
     return GraphInputs(robots, clusters, edges, reachable, base)

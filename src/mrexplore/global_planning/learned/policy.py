@@ -208,7 +208,7 @@ class LearnedPlanner:
     def begin(self, state: StateGrid, resolution_m: float) -> None:
         """Start predicting ``state``, the grid of the problem that :meth:`assign` will get next (where this
         planner reads a prediction)."""
-        if self.net.cfg.use_predicted_gain or self.gain_cost:
+        if self.net.cfg.reads_prediction or self.gain_cost:
             self.ahead.start(self.predictor, state, resolution_m)
 
     def inputs(self, problem: AssignmentProblem) -> GraphInputs:
@@ -218,10 +218,14 @@ class LearnedPlanner:
     def _inputs(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64]]:
         """The inputs and the heuristic cost ``(R, C) float64`` under the residual (``inf`` where unreachable)."""
         terms = None
-        if self.net.cfg.use_predicted_gain or self.gain_cost:
-            terms = predicted_terms(self.predictor, problem, self.heuristic, self.gain_cost, self.ahead)
-        gains = terms.gain_m2 if terms is not None and self.net.cfg.use_predicted_gain else None
-        g = graph_inputs(problem, self.net.cfg, self.heuristic, gains)
+        ncfg = self.net.cfg
+        if ncfg.reads_prediction or self.gain_cost:
+            # The shortcuts where the network reads them, or where the heuristic cost weighs them.
+            shortcuts = ncfg.use_predicted_path or (self.gain_cost and self.heuristic.path_weight != 0.0)
+            terms = predicted_terms(self.predictor, problem, self.heuristic, shortcuts, self.ahead)
+        gains = terms.gain_m2 if terms is not None and ncfg.use_predicted_gain else None
+        paths = terms.shortcut_m if terms is not None and ncfg.use_predicted_path else None
+        g = graph_inputs(problem, ncfg, self.heuristic, gains, paths)
         cost = utility_cost(problem, self.heuristic)
         if self.gain_cost:
             assert terms is not None
