@@ -32,7 +32,7 @@ class PredictedTerms:
     shortcut_m: NDArray[np.float64] | None
     """``(n_robots, n_clusters)`` how much shorter each robot's path to each centre is through predicted free
     space than through known free space, metres (0 where none is shorter or none leads); None: not computed
-    (``path_weight`` 0)."""
+    (neither weighed by ``path_weight`` nor read by a policy)."""
 
 
 class PredictionAhead:
