@@ -1,4 +1,4 @@
-"""What the benchmarks share: the example maps (``mrexplore.example_maps``: ``$MREXPLORE_MAPS`` or
+"""What the benchmarks share: the example maps (``mrexplore.runtime.example_maps``: ``$MREXPLORE_MAPS`` or
 ../shared/maps), the largest HouseExpo map, timed missions, and one way to end a script on bad input.
 
 Run a benchmark from the repository root: ``python benchmarks/NAME.py --help``.
@@ -14,11 +14,11 @@ from pathlib import Path
 import numpy as np
 
 from mrexplore.config import MapConfig, MissionConfig, SimConfig
-from mrexplore.example_maps import maps_dir
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import make_strategy
-from mrexplore.timing import PhaseTimes
+from mrexplore.runtime.example_maps import maps_dir
+from mrexplore.runtime.timing import PhaseTimes
 from mrexplore.types import MrExploreError
 
 EXIT_BAD_INPUT = 2

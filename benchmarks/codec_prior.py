@@ -20,12 +20,12 @@ import numpy as np
 from _common import run_script, skip
 
 from mrexplore.config import MapConfig, MissionConfig, SimConfig
-from mrexplore.example_maps import maps_dir
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import make_strategy
 from mrexplore.preprocessing import sparse_codec, transmission
-from mrexplore.progress import Progress
+from mrexplore.runtime.example_maps import maps_dir
+from mrexplore.runtime.progress import Progress
 
 TEAMS = (2, 3, 5)
 STRATEGIES = ("hier", "utility")

@@ -29,12 +29,12 @@ from _common import run_script
 
 from mrexplore.bench.report import paired_bootstrap
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig, TrainConfig
-from mrexplore.example_maps import maps_dir
 from mrexplore.global_planning.protocol import Assignment
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import make_strategy
 from mrexplore.prediction.network import load_predictor
+from mrexplore.runtime.example_maps import maps_dir
 from mrexplore.training.expert import (
     candidate_assignments,
     known_world_returns,
@@ -50,7 +50,7 @@ def episode(args: tuple[str, int, int, bool, str, str | None]) -> int:
     path, robots, seed, expert, world, predictor_file = args
     predictor = load_predictor(predictor_file) if world == "predicted" else None
     cfg = TrainConfig()
-    truth = load_map(path, MapConfig(resolution_m=cfg.resolution_m))
+    truth = load_map(path, MapConfig(resolution_m=cfg.episodes.resolution_m))
     pipeline = make_strategy("hier-heuristic")
     m = Mission(
         MissionSpec(truth, pipeline, SimConfig(robots=robots), MissionConfig(max_steps=2000), seed), progress=False

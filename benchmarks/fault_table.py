@@ -19,7 +19,7 @@ from _common import run_script, skip
 from mrexplore.bench.report import paired_bootstrap
 from mrexplore.bench.runner import read_rows
 from mrexplore.cli import main as cli
-from mrexplore.example_maps import maps_dir
+from mrexplore.runtime.example_maps import maps_dir
 
 SHARED = maps_dir()
 SETTINGS = {

@@ -23,8 +23,8 @@ import time
 import numpy as np
 from _common import run_script
 
-from mrexplore.boxes import cells_of
 from mrexplore.config import MapConfig
+from mrexplore.maps.boxes import cells_of
 from mrexplore.maps.loaders import load_map
 from mrexplore.paths.distance_field import distance_fields, pairwise_distances
 

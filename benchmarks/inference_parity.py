@@ -20,8 +20,8 @@ from _common import run_script
 
 from mrexplore.bench.compare import _NOT_RESULTS
 from mrexplore.bench.runner import read_rows
-from mrexplore.example_maps import maps_dir
-from mrexplore.pipeline.registry import INFERENCE_ENV
+from mrexplore.pipeline.strategies import INFERENCE_ENV
+from mrexplore.runtime.example_maps import maps_dir
 from mrexplore.types import MrExploreError
 
 BACKENDS = ("numpy", "torch")

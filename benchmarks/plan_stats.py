@@ -27,9 +27,9 @@ from scipy import ndimage
 
 from mrexplore.bench.runner import expand_maps
 from mrexplore.config import MapConfig
-from mrexplore.example_maps import maps_dir
 from mrexplore.maps.ground_truth import explorable_region
 from mrexplore.maps.loaders import load_map
+from mrexplore.runtime.example_maps import maps_dir
 from mrexplore.sim.starts import draw_starts
 from mrexplore.types import MrExploreError
 

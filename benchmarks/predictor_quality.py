@@ -20,14 +20,14 @@ import numpy as np
 from _common import run_script
 
 from mrexplore.config import MapConfig, SimConfig
-from mrexplore.example_maps import maps_dir
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import MissionSpec, run_mission
 from mrexplore.pipeline import make_strategy
 from mrexplore.prediction.baselines import predict_all_free, predict_extended_walls
 from mrexplore.prediction.network import load_predictor
 from mrexplore.prediction.quality import near_frontier
-from mrexplore.progress import Progress
+from mrexplore.runtime.example_maps import maps_dir
+from mrexplore.runtime.progress import Progress
 from mrexplore.types import CellState
 
 RADII_M = (3.0, 6.0)

@@ -28,7 +28,7 @@ from mrexplore.config import RunConfig, read_config_file
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import make_strategy
-from mrexplore.timing import PhaseTimes
+from mrexplore.runtime.timing import PhaseTimes
 
 BANDS = (0.0, 0.15, 0.3, 0.5, 0.75, 0.95, 1.01)
 PHASES = ("round", "candidates", "distances", "assignment", "routes")

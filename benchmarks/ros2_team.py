@@ -28,11 +28,11 @@ import numpy as np
 from _common import houseexpo_dir, largest_houseexpo, run_script, skip
 
 from mrexplore.config import MapConfig, MissionConfig, SimConfig
-from mrexplore.example_maps import maps_dir
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import make_strategy
 from mrexplore.preprocessing.sparse_codec import BASELINE_HEADER_BYTES
+from mrexplore.runtime.example_maps import maps_dir
 
 HOUSE = "houseexpo/json/0a1b29dba355df2ab02630133187bfab.json"
 DUNGEON = "dungeon/complex_img_43.png"

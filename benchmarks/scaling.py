@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 from _common import run_script, time_mission
 
-from mrexplore.example_maps import maps_dir
+from mrexplore.runtime.example_maps import maps_dir
 
 KTH = maps_dir() / "kth_floorplans"
 

@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mrexplore.example_maps import maps_dir
 from mrexplore.maps.frame import GridFrame
 from mrexplore.maps.ground_truth import GroundTruthMap
+from mrexplore.runtime.example_maps import maps_dir
 from mrexplore.types import CellState
 
 SHARED_MAPS = maps_dir().resolve()

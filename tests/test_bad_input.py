@@ -138,7 +138,10 @@ CLI_ERRORS = [
         ["--start", "3.0,3.0", "--start", "3.05,3.05"],
         "--start puts two robots in one cell; give starts at least one cell apart",
     ),
-    (["--resolution", "nan"], "argument --resolution: must be a number > 0, got 'nan'; see 'mrexplore explore --help'"),
+    (
+        ["--resolution", "nan"],
+        "argument --resolution: must be a number > 0 metres, got 'nan'; see 'mrexplore explore --help'",
+    ),
     (["--max-steps", "0"], "argument --max-steps: must be an integer >= 1, got '0'; see 'mrexplore explore --help'"),
     (["--gif", "/nonexistent/x.gif"], "--gif folder /nonexistent does not exist; create it first"),
     (["--png", "/"], "--png / is a folder; pass a file path"),
@@ -149,9 +152,13 @@ CLI_ERRORS = [
     (["--robot-failure", "5@10"], "--robot-failure names robot 5, but a team of 2 has robots 0..1"),
     (
         ["--message-loss", "1"],
-        "argument --message-loss: must be a probability in [0, 1), got '1'; see 'mrexplore explore --help'",
+        "argument --message-loss: must be a number in [0, 1), got '1'; see 'mrexplore explore --help'",
     ),
-    (["--comm-range", "-3"], "argument --comm-range: must be a number > 0, got '-3'; see 'mrexplore explore --help'"),
+    (
+        ["--comm-range", "-3"],
+        "argument --comm-range: must be a number > 0 metres, or null for unlimited, got '-3'; "
+        "see 'mrexplore explore --help'",
+    ),
     (
         ["--centre-restart", "x"],
         "argument --centre-restart: must be a step >= 0, got 'x'; see 'mrexplore explore --help'",
@@ -181,8 +188,12 @@ def test_bench_and_train_arguments(tmp_path, capsys) -> None:
     assert _err(capsys) == (
         "argument --workers: must be an integer >= 0 (0: one per core), got '-1'; see 'mrexplore bench --help'"
     )
-    assert main(["bench", "--maps", "generated:1", "--out", str(out), "--robots", "2,2"]) == 2
-    assert _err(capsys) == "--robots names a team size twice (2,2); give each size once"
+    assert main(["bench", "--maps", "generated:1", "--out", str(out), "--team-sizes", "2,2"]) == 2
+    assert _err(capsys) == "--team-sizes names a team size twice (2,2); give each size once"
+    assert main(["bench", "--maps", "generated:1", "--out", str(out), "--robots", "2,3"]) == 2
+    assert _err(capsys) == "argument --robots: must be an integer >= 1, got '2,3'; see 'mrexplore bench --help'"
+    assert main(["bench", "--maps", "generated:1", "--out", str(out), "--robots", "2", "--team-sizes", "2,3"]) == 2
+    assert _err(capsys) == "--robots and --team-sizes both give the team; give one"
     (tmp_path / "file").write_text("x")
     assert main(["bench", "--maps", "generated:1", "--out", str(tmp_path / "file")]) == 2
     assert _err(capsys) == f"--out {tmp_path / 'file'} is a file, not a folder; pass a folder"

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mrexplore.centre import NavState, TeamPlanner
 from mrexplore.config import SensorConfig
+from mrexplore.mission.centre import NavState, TeamPlanner
 from mrexplore.pipeline import make_strategy
 from mrexplore.preprocessing.agents import RobotAgent
 from mrexplore.preprocessing.sparse_codec import decode

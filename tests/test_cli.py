@@ -107,11 +107,13 @@ def test_given_starts(capsys) -> None:
         ),
         (
             ["--resolution", "0"],
-            "mrexplore: error: argument --resolution: must be a number > 0, got '0'; see 'mrexplore explore --help'",
+            "mrexplore: error: argument --resolution: must be a number > 0 metres, got '0'; "
+            "see 'mrexplore explore --help'",
         ),
         (
             ["--commitment", "2"],
-            "mrexplore: error: commitment must be in [0, 1], or null for the strategy's default, got 2.0",
+            "mrexplore: error: argument --commitment: must be a number in [0, 1], or null for the strategy's "
+            "default, got '2'; see 'mrexplore explore --help'",
         ),
         (
             ["--save-map", "no/such/folder/map"],
@@ -169,7 +171,7 @@ def test_saved_centre_map_loads_back(tmp_path, capsys) -> None:
 def test_train_smoke_then_explore_with_that_policy(tmp_path, capsys) -> None:
     cfg = tmp_path / "tiny.yaml"
     cfg.write_text(
-        "train:\n  resolution_m: 0.2\n  robots_max: 2\n  max_steps: 60\n  val_maps: 1\n  dagger_rounds: 1\n"
+        "train:\n  episodes: {resolution_m: 0.2, robots_max: 2, max_steps: 60}\n  val_maps: 1\n  dagger_rounds: 1\n"
         "  episodes_per_round: 1\n  horizon_steps: 15\n  imitation_epochs: 1\n  ppo_iterations: 0\n"
         "  search_generations: 1\n  search_population: 2\n  search_elites: 1\n  search_episodes: 1\n"
         "  learned:\n    hidden: 8\n"
@@ -199,7 +201,7 @@ def test_a_run_that_keeps_its_baseline_says_so(tmp_path, capsys) -> None:
     """One episode of budget: no trained stage beats the baseline, and the last line and stages.csv say the
     policy is the untrained start."""
     cfg = tmp_path / "tiny.yaml"
-    cfg.write_text("train:\n  resolution_m: 0.2\n  robots_max: 2\n  max_steps: 60\n  val_maps: 1\n")
+    cfg.write_text("train:\n  episodes: {resolution_m: 0.2, robots_max: 2, max_steps: 60}\n  val_maps: 1\n")
     out = tmp_path / "run"
     args = ["train", "--out", str(out), "--config", str(cfg), "--workers", "1", "--episodes", "1"]
     assert main([*args, "--train-maps", str(tmp_path / "none")]) == 0
@@ -263,11 +265,19 @@ def test_ncm_explores_and_benches_with_a_given_policy(tmp_path, capsys) -> None:
     )
 
 
-def test_the_built_in_names_are_the_registry_s() -> None:
-    from mrexplore.pipeline import strategy_names
-    from mrexplore.strategy_names import BUILTIN_STRATEGIES
+NAMES = """
+import sys
+from mrexplore.pipeline import strategy_names, strategy_spec
+print(len(strategy_names()), strategy_spec("hier-nolocal").name,
+      sorted(m for m in sys.modules if m.startswith("mrexplore.pipeline.") and m != "mrexplore.pipeline.registry"))
+"""
 
-    assert tuple(strategy_names()) == BUILTIN_STRATEGIES
+
+def test_naming_the_strategies_imports_none_of_them() -> None:
+    """The registry holds each strategy's factory by its import path: listing and checking names imports no
+    pipeline (the command line checks a name before any work)."""
+    out = subprocess.run([sys.executable, "-c", NAMES], capture_output=True, text=True, timeout=60, check=True)
+    assert out.stdout.strip() == "11 hier []"
 
 
 LIGHT = """
@@ -290,7 +300,7 @@ def test_help_and_argument_errors_import_none_of_the_heavy_modules() -> None:
 def test_a_first_run_says_it_compiles(monkeypatch, tmp_path, capsys) -> None:
     """Where numba's cache holds no kernels yet, the run says so on stderr before compiling; once cached,
     nothing."""
-    from mrexplore import kernel_cache
+    from mrexplore.runtime import kernel_cache
 
     assert kernel_cache.kernels_cached()  # this checkout ran missions before
     monkeypatch.setattr(kernel_cache, "_SENTINEL", "no-such-kernel.*.nbi")
@@ -306,7 +316,7 @@ def test_the_predictive_strategy_runs_with_a_trained_predictor_or_none(tmp_path,
     ``--predictor none`` runs without one; bad predictor input is one line."""
     cfg = tmp_path / "tiny.yaml"
     cfg.write_text(
-        "predictor:\n  missions: 2\n  val_missions: 1\n  moments: 1\n  max_steps: 100\n  resolution_m: 0.2\n"
+        "predictor:\n  missions: 2\n  val_missions: 1\n  moments: 1\n  episodes: {max_steps: 100, resolution_m: 0.2}\n"
         "  width: 2\n  crop_cells: 16\n  batch: 2\n  epochs: 1\n  steps_per_epoch: 1\n"
     )
     out = tmp_path / "pred"

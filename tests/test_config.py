@@ -8,6 +8,7 @@ import re
 import pytest
 
 from mrexplore.config import (
+    EpisodesConfig,
     GlobalPlanningConfig,
     PreprocessConfig,
     RunConfig,
@@ -25,9 +26,9 @@ from mrexplore.types import MrExploreError
         (lambda: SensorConfig(range_m=0.0), "range_m must be > 0 metres, got 0.0"),
         (lambda: PreprocessConfig(closing_size_cells=2), "closing_size_cells must be odd and >= 1, got 2"),
         (lambda: GlobalPlanningConfig(portal_sector_blocks=1), "portal_sector_blocks must be 0 or >= 2, got 1"),
-        (lambda: TrainConfig(robots_min=3, robots_max=2), "robots_max must be >= robots_min (3), got 2"),
+        (lambda: EpisodesConfig(robots_min=3, robots_max=2), "robots_max must be >= robots_min (3), got 2"),
         (lambda: TrainConfig(search_elites=9), "search_elites must be in [1, search_population (8)], got 9"),
-        (lambda: TrainConfig(plans="grid"), "plans must be 'varied' or 'generated', got 'grid'"),
+        (lambda: EpisodesConfig(plans="grid"), "plans must be 'varied' or 'generated', got 'grid'"),
     ],
 )
 def test_a_value_outside_its_constraint_is_refused_in_words(make, message) -> None:

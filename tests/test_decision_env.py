@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from mrexplore.config import MapConfig, MissionConfig, SimConfig
-from mrexplore.decision_env import DecisionEnv
 from mrexplore.global_planning.classical import NearestPlanner
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import MissionSpec
+from mrexplore.mission.decision_env import DecisionEnv
 from mrexplore.pipeline import make_strategy
 
 

@@ -241,7 +241,7 @@ def test_centre_refuses_a_delta_on_a_base_it_lacks() -> None:
 
 
 def test_gif_frames_draw_failed_and_unheard_robots() -> None:
-    from mrexplore.render import render_frame
+    from mrexplore.mission.render import render_frame
 
     occ = np.zeros((20, 20), bool)
     state = np.full((20, 20), CellState.FREE, np.uint8)
@@ -267,7 +267,7 @@ def test_gif_frames_draw_failed_and_unheard_robots() -> None:
 def test_rounds_where_the_centre_hears_nobody_pose_nothing_and_the_mission_goes_on(small_map) -> None:
     """With 80% loss some rounds bring no message at all: no decision is taken there, and the stepped
     interfaces (pose/commit, the decision-level env) run on to the end."""
-    from mrexplore.decision_env import DecisionEnv
+    from mrexplore.mission.decision_env import DecisionEnv
 
     faults = FaultConfig(message_loss=0.8, silence_rounds=1)
     cfg = MissionConfig(max_steps=3000, faults=faults)

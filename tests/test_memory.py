@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mrexplore.memory import peak_mb, reset_peak
+from mrexplore.runtime.memory import peak_mb, reset_peak
 
 
 def test_peak_follows_an_allocation_and_starts_again_at_a_reset() -> None:

@@ -171,7 +171,7 @@ def test_progress_lines_every_few_seconds_where_no_terminal() -> None:
     """Piped output gets a line every LINE_EVERY_S seconds of work and one at the end; off prints nothing."""
     import io
 
-    from mrexplore.progress import LINE_EVERY_S, Progress
+    from mrexplore.runtime.progress import LINE_EVERY_S, Progress
 
     out, clock = io.StringIO(), _Clock()
     p = Progress(10, "bench", "episodes", None, stream=out, clock=clock)
@@ -207,7 +207,7 @@ def test_progress_lines_every_few_seconds_where_no_terminal() -> None:
 def test_a_mission_s_progress_line_says_coverage_and_step() -> None:
     import io
 
-    from mrexplore.progress import Progress
+    from mrexplore.runtime.progress import Progress
 
     out, clock = io.StringIO(), _Clock()
     p = Progress(100, "hier generated:0", "%", None, stream=out, clock=clock)
@@ -221,7 +221,7 @@ def test_a_bar_ends_on_one_line_of_its_last_state() -> None:
     """tqdm's close() prints the final state again: where output is no terminal that was a second line."""
     import io
 
-    from mrexplore.progress import Progress
+    from mrexplore.runtime.progress import Progress
 
     out = io.StringIO()
     p = Progress(2, "bench", "episodes", True, stream=out)

@@ -9,9 +9,9 @@ from PIL import Image
 from mrexplore.config import MapConfig, MissionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import MissionSpec, run_mission
+from mrexplore.mission.render import FRONTIER_COLOURS, Caption, GifRecorder, framed, render_frame
 from mrexplore.pipeline import make_strategy
 from mrexplore.preprocessing.clustering import Clusters
-from mrexplore.render import FRONTIER_COLOURS, Caption, GifRecorder, framed, render_frame
 from mrexplore.types import CellState
 
 

@@ -6,7 +6,7 @@ import threading
 
 import pytest
 
-from mrexplore.threads import THREADS_ENV, map_threads, start_thread, thread_count
+from mrexplore.runtime.threads import THREADS_ENV, map_threads, start_thread, thread_count
 from mrexplore.types import MrExploreError
 
 
@@ -24,7 +24,9 @@ def test_several_threads_keep_order(monkeypatch: pytest.MonkeyPatch) -> None:
 @pytest.mark.parametrize("text", ["0", "two"])
 def test_bad_setting_refused(monkeypatch: pytest.MonkeyPatch, text: str) -> None:
     monkeypatch.setenv(THREADS_ENV, text)
-    with pytest.raises(MrExploreError, match=rf"^MREXPLORE_THREADS must be an integer >= 1, got '{text}'; unset it"):
+    with pytest.raises(
+        MrExploreError, match=rf"^MREXPLORE_THREADS must be an integer >= 1, got '{text}'; unset it for the default$"
+    ):
         thread_count()
 
 

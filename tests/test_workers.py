@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import time
 
-from mrexplore.workers import JobRunner
+from mrexplore.runtime.workers import JobRunner
 
 
 def test_inline_and_local_workers_give_every_result() -> None:

@@ -12,7 +12,7 @@ from mrexplore.cli import main
 @pytest.fixture(scope="module")
 def bench_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("bench")
-    args = ["bench", "--maps", "generated:1", "--strategies", "utility", "--robots", "2,3", "--seeds", "2"]
+    args = ["bench", "--maps", "generated:1", "--strategies", "utility", "--team-sizes", "2,3", "--seeds", "2"]
     assert main([*args, "--resolution", "0.2", "--max-steps", "400", "--workers", "1", "--out", str(out)]) == 0
     return out
 

@@ -22,8 +22,8 @@ from mrexplore.prediction.network import (
     load_predictor,
     phase_weights,
 )
+from mrexplore.runtime.weights_archive import write_weights_archive
 from mrexplore.types import CellState, MrExploreError
-from mrexplore.weights_archive import write_weights_archive
 
 
 def _reference_conv(x: np.ndarray, w: np.ndarray, b: np.ndarray, dilation: int) -> np.ndarray:

@@ -137,7 +137,7 @@ def test_baseline_grid_bytes_are_the_known_box_as_ros_values(h: int, w: int, see
     too, and a grid with nothing known gives the header alone."""
     import zlib
 
-    from mrexplore.boxes import mask_box
+    from mrexplore.maps.boxes import mask_box
     from mrexplore.preprocessing.sparse_codec import BASELINE_HEADER_BYTES
     from mrexplore.preprocessing.transmission import occupancy_grid_bytes
 

@@ -41,7 +41,7 @@ def main() -> None:
 
     robot = subprocess.Popen(
         [sys.executable, "-m", "mrexplore", "ros2", "robot", "--name", "robot1", "--index", "0"]
-        + ["--team-grid", "0,0,1.0,0.8", "--resolution", "0.1"],
+        + ["--team-grid", "0,0,1.0,0.8", "--team-resolution", "0.1"],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,

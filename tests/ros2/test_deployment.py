@@ -45,9 +45,15 @@ def test_a_deployment_file_names_robots_frames_topics_and_timing(tmp_path) -> No
     [
         ({}, "deployment must list its robots: robots: [robot1, robot2]"),
         ({"robots": ["a"], "speed": 2}, "deployment has unknown setting 'speed'; known: blacklist_s, lost_after_s"),
-        ({"robots": ["1st"]}, "deployment: robot name '1st' must be letters, digits and _ (a ROS name), from a letter"),
+        (
+            {"robots": ["1st"]},
+            "deployment: robot name must be letters, digits and _ (a ROS name), from a letter, got '1st'",
+        ),
         ({"robots": [{"name": "a", "offset": [0, 0]}]}, "deployment: robot a's offset must be [x, y, yaw]"),
-        ({"robots": [{"name": "a", "pose_type": "gps"}]}, "deployment: robot a's pose_type must be one of"),
+        (
+            {"robots": [{"name": "a", "pose_type": "gps"}]},
+            "deployment: robot a's pose_type must be 'pose_with_covariance', 'odometry' or 'tf', got 'gps'",
+        ),
         ({"robots": ["a"], "round_period_s": 0}, "deployment: round_period_s must be > 0 seconds, got 0.0"),
         ({"robots": ["a"], "team_grid": {"x0": "left"}}, "deployment: team_grid.x0 must be a finite number"),
     ],
@@ -61,8 +67,8 @@ def test_a_bad_deployment_is_one_line_naming_the_problem(data: dict, message: st
 def test_a_team_grid_too_large_or_empty_is_refused() -> None:
     with pytest.raises(MrExploreError, match="team grid holds 4,000,000 cells at 0.1 m, more than 1,000,000"):
         TeamGrid(0, 0, 200.0, 200.0, 0.1).frame(10**6)
-    with pytest.raises(MrExploreError, match="team grid must have a size and a cell size > 0"):
-        TeamGrid(0, 0, 0.0, 2.0, 0.1).frame(10**6)
+    with pytest.raises(MrExploreError, match=r"^width must be > 0 metres, got 0.0$"):
+        TeamGrid(0, 0, 0.0, 2.0, 0.1)
 
 
 def test_the_lockstep_exchange_round_trips_and_refuses_garbage() -> None:
@@ -92,9 +98,9 @@ def test_ros2_help_documents_the_deployment_file(capsys) -> None:
     ("argv", "message"),
     [
         (["ros2", "centre", "--deployment", "missing.yaml"], "deployment file missing.yaml not found"),
-        (["ros2", "centre", "--robots", "a,b", "--strategy", "oracle"], "the oracle needs the ground truth"),
+        (["ros2", "centre", "--names", "a,b", "--strategy", "oracle"], "the oracle needs the ground truth"),
         (["ros2", "robot", "--name", "r1"], "give the robot's place in the team: --index N"),
-        (["ros2", "centre"], "name the robots: --robots robot1,robot2 or --deployment FILE"),
+        (["ros2", "centre"], "name the robots: --names robot1,robot2 or --deployment FILE"),
     ],
 )
 def test_ros2_commands_refuse_bad_input_before_starting(argv: list[str], message: str, capsys) -> None:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import torch
 
-from mrexplore.config import PredictorTrainConfig
+from mrexplore.config import EpisodesConfig, PredictorTrainConfig
 from mrexplore.prediction.network import UNetNp, load_predictor
 from mrexplore.training.predictor import (
     PREDICTOR_LOG_COLUMNS,
@@ -26,8 +26,8 @@ from mrexplore.training.predictor_net import PredictorUNet
 from mrexplore.types import MrExploreError
 
 TINY = PredictorTrainConfig(
-    resolution_m=0.2, missions=2, val_missions=1, moments=2, max_steps=120, robots_min=2, robots_max=2, width=2,
-    crop_cells=16, batch=2, epochs=3, steps_per_epoch=2,
+    episodes=EpisodesConfig(resolution_m=0.2, max_steps=120, robots_min=2, robots_max=2),
+    missions=2, val_missions=1, moments=2, width=2, crop_cells=16, batch=2, epochs=3, steps_per_epoch=2,
 )  # fmt: skip
 
 

@@ -4,21 +4,20 @@ from __future__ import annotations
 
 import csv
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 import torch
 
-from mrexplore.config import NcmTrainConfig, TrainConfig
+from mrexplore.config import EpisodesConfig, NcmTrainConfig, TrainConfig
 from mrexplore.global_planning.learned.checkpoint import load_policy
 from mrexplore.training.trainer import LOG_COLUMNS, split_maps, train
 from mrexplore.types import MrExploreError
 
+TINY_EPISODES = EpisodesConfig(resolution_m=0.2, robots_min=2, robots_max=2, max_steps=80)
 TINY = TrainConfig(
-    resolution_m=0.2,
-    robots_min=2,
-    robots_max=2,
-    max_steps=80,
+    episodes=TINY_EPISODES,
     val_maps=1,
     search_generations=0,
     dagger_rounds=1,
@@ -102,11 +101,15 @@ def test_validate_policy_gives_steps_to_the_end_and_to_99_per_map_in_order() -> 
     from mrexplore.training.trainer import FRESH_SEED0, validate_policy
 
     maps = [f"varied:{FRESH_SEED0 + i}" for i in (1, 0)]
-    got_maps, steps, cov = validate_policy(None, replace(TINY, max_steps=400), None, workers=2, maps=maps)
+    got_maps, steps, cov = validate_policy(
+        None, replace(TINY, episodes=replace(TINY_EPISODES, max_steps=400)), None, workers=2, maps=maps
+    )
     assert got_maps == maps and steps.shape == (2, 2) and cov.shape == (2,)
     assert (steps[1] <= steps[0]).all() and (cov >= 0.99).all()  # both explored: 99% comes before the end
     # an episode's seed is its position: the first map alone runs the same episode again
-    alone = validate_policy(None, replace(TINY, max_steps=400), None, workers=1, maps=maps[:1])[1]
+    alone = validate_policy(
+        None, replace(TINY, episodes=replace(TINY_EPISODES, max_steps=400)), None, workers=1, maps=maps[:1]
+    )[1]
     assert alone[:, 0].tolist() == steps[:, 0].tolist()
 
 
@@ -121,7 +124,7 @@ def test_validation_comes_back_in_the_maps_order_whatever_finishes_first(monkeyp
         yield from reversed([run_job(j) for j in jobs])
 
     monkeypatch.setattr(tr._Runner, "run", last_first)
-    cfg = replace(TINY, max_steps=400)
+    cfg = replace(TINY, episodes=replace(TINY_EPISODES, max_steps=400))
     maps = [f"varied:{tr.FRESH_SEED0 + i}" for i in (0, 1)]
     steps = tr.validate_policy(None, cfg, None, workers=1, maps=maps)[1]
     alone = tr.validate_policy(None, cfg, None, workers=1, maps=maps[:1])[1]  # the same first episode
@@ -189,7 +192,7 @@ def test_training_episodes_take_the_run_settings_and_keep_faults_inside_the_team
         2,
         0,
         None,
-        TrainConfig(resolution_m=0.2, max_steps=77),
+        TrainConfig(episodes=EpisodesConfig(resolution_m=0.2, max_steps=77)),
         sim=SimConfig(sensor=SensorConfig(range_m=4.0)),
         mission=MissionConfig(faults=faults),
     )
@@ -201,10 +204,7 @@ def test_training_episodes_take_the_run_settings_and_keep_faults_inside_the_team
 
 NCM_TINY = TrainConfig(
     strategy="ncm",
-    resolution_m=0.2,
-    robots_min=2,
-    robots_max=2,
-    max_steps=120,
+    episodes=replace(TINY_EPISODES, max_steps=120),
     val_maps=1,
     ncm=NcmTrainConfig(ppo_iterations=2, ppo_episodes=1, ppo_epochs=1),
 )

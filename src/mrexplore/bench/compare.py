@@ -12,7 +12,7 @@ from pathlib import Path
 
 from mrexplore.bench.report import paired_bootstrap, paired_table, steps_of, steps_table
 from mrexplore.bench.runner import read_rows
-from mrexplore.strategy_names import TABLE_I
+from mrexplore.pipeline.registry import TABLE_I
 from mrexplore.types import MrExploreError
 
 __all__ = ["compare_runs", "team_ratio", "table_time", "TABLE_I"]

@@ -6,7 +6,7 @@ Rerunning the same command skips every episode already in the file. An episode i
 (resolved path), strategy, team size, seed, the hash of every other setting that changes a result (the
 whole :class:`~mrexplore.config.RunConfig` but for training) and, for learned strategies, the policy's
 sha256. A folder holds one set of settings (``settings.yaml``): a rerun with others is refused, naming
-what differs. Workers exit with the run (:mod:`mrexplore.workers`).
+what differs. Workers exit with the run (:mod:`mrexplore.runtime.workers`).
 """
 
 from __future__ import annotations
@@ -26,15 +26,15 @@ import yaml
 from PIL import Image
 
 from mrexplore.config import RunConfig, TrainConfig, config_to_dict
-from mrexplore.csv_append import append_row, drop_partial_tail
+from mrexplore.config.safe_yaml import load_yaml_file
 from mrexplore.maps.loaders import is_generator_spec, load_map_shared
 from mrexplore.mission import MissionSpec, run_mission
 from mrexplore.pipeline import make_strategy, policy_for, strategy_spec
-from mrexplore.progress import Progress
-from mrexplore.safe_yaml import load_yaml_file
-from mrexplore.threads import THREADS_ENV
+from mrexplore.runtime.csv_append import append_row, drop_partial_tail
+from mrexplore.runtime.progress import Progress
+from mrexplore.runtime.threads import THREADS_ENV
+from mrexplore.runtime.workers import JobRunner
 from mrexplore.types import MrExploreError
-from mrexplore.workers import JobRunner
 
 __all__ = [
     "EpisodeSpec",
@@ -138,7 +138,7 @@ def _reads_prediction(policy: str | None) -> bool:
 def _predictor_sha(predictor: str | None) -> str:
     from mrexplore.pipeline.registry import NO_PREDICTOR
     from mrexplore.prediction.network import default_predictor_path
-    from mrexplore.weights_archive import file_sha256
+    from mrexplore.runtime.weights_archive import file_sha256
 
     if predictor == NO_PREDICTOR:
         return NO_PREDICTOR
@@ -157,7 +157,11 @@ of before, a setting is left out of the hash, so those benches' rows keep theirs
 def _settings_dict(run: RunConfig) -> dict[str, Any]:
     d = config_to_dict(replace(run, train=TrainConfig()))
     del d["train"]
+    del d["runtime"]  # how the process runs, never what it finds
     del d["sim"]["robots"]  # a column of its own
+    # The predictor's training settings were one flat section before their episodes had a section of their
+    # own; flat again (the hash sorts keys), so that benches kept before keep their hashes.
+    d["predictor"].update(d["predictor"].pop("episodes"))
     for section, key, before in _ADDED_LATER:
         if d[section].get(key, before) == before:
             d[section].pop(key, None)

@@ -14,7 +14,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import cells_of
+from mrexplore.maps.boxes import cells_of
 from mrexplore.preprocessing.frontiers import Frontiers
 from mrexplore.types import BoolGrid, CellState, StateGrid
 

@@ -16,8 +16,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
-from mrexplore.boxes import cells_of
 from mrexplore.global_planning.tours import open_tour, split_tour
+from mrexplore.maps.boxes import cells_of
 from mrexplore.paths.distance_field import distance_fields, distance_matrix, distances_at
 from mrexplore.sim.lidar import Beams
 from mrexplore.types import BoolGrid

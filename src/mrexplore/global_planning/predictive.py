@@ -17,7 +17,7 @@ from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.protocol import Assignment, AssignmentProblem
 from mrexplore.prediction.gain import predicted_gain_m2, predicted_p_free, predicted_paths_m
 from mrexplore.prediction.network import MapPredictor
-from mrexplore.threads import start_thread
+from mrexplore.runtime.threads import start_thread
 from mrexplore.types import StateGrid
 
 __all__ = ["PredictiveUtilityPlanner", "PredictedTerms", "PredictionAhead", "predicted_terms", "predicted_cost"]

@@ -8,7 +8,9 @@ compares them)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -289,8 +291,25 @@ def generate_floorplan(spec: FloorplanSpec, resolution_m: float) -> BoolGrid:
             occ[cells(d0, d1, H), cells(w0, w1, W)] = False
         else:
             occ[cells(w0, w1, H), cells(d0, d1, W)] = False
+    _add_clutter(occ, spec, rooms, keep, corridor_ix, lambda y0, y1, x0, x1: (cells(y0, y1, H), cells(x0, x1, W)))
+    return occ
+
+
+Rect = tuple[float, float, float, float]
+
+
+def _add_clutter(
+    occ: BoolGrid,
+    spec: FloorplanSpec,
+    rooms: list[Rect],
+    keep: Any,
+    corridor_ix: int,
+    box: Callable[[float, float, float, float], tuple[slice, slice]],
+) -> None:
+    """Blocks of clutter in the kept rooms but the corridor, from the spec's own generator; ``box(y0, y1, x0,
+    x1)`` gives a rectangle's cells."""
     clutter = np.random.default_rng([spec.seed, 2])
-    gap = half + 1.0  # a block keeps 1 m from every wall, so doors stay open and the room connected
+    gap = spec.wall_m / 2 + 1.0  # a block keeps 1 m from every wall, so doors stay open and the room connected
     for k, (x0, y0, x1, y1) in enumerate(rooms):
         if not keep[k] or k == corridor_ix or spec.clutter_prob <= 0 or clutter.random() >= spec.clutter_prob:
             continue
@@ -300,5 +319,4 @@ def generate_floorplan(spec: FloorplanSpec, resolution_m: float) -> BoolGrid:
                 break
             bx = clutter.uniform(x0 + gap, x1 - gap - bw)
             by = clutter.uniform(y0 + gap, y1 - gap - bh)
-            occ[cells(by, by + bh, H), cells(bx, bx + bw, W)] = True
-    return occ
+            occ[box(by, by + bh, bx, bx + bw)] = True

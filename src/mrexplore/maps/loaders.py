@@ -18,13 +18,13 @@ import numpy as np
 from PIL import Image, ImageDraw, UnidentifiedImageError
 
 from mrexplore.config import MapConfig
-from mrexplore.example_maps import DEFAULT_MAP
+from mrexplore.config.safe_yaml import load_yaml_file
 from mrexplore.maps.floorplan import FloorplanSpec, generate_floorplan
 from mrexplore.maps.frame import GridFrame
 from mrexplore.maps.ground_truth import GroundTruthMap, close_narrow_gaps, mark_outside_as_obstacle
 from mrexplore.maps.plan_check import check_plan, check_tones
 from mrexplore.maps.resample import resample_obstacles
-from mrexplore.safe_yaml import load_yaml_file
+from mrexplore.runtime.example_maps import DEFAULT_MAP
 from mrexplore.types import MrExploreError
 
 __all__ = [

@@ -14,10 +14,10 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import Box
+from mrexplore.maps.boxes import Box
 from mrexplore.paths.kernels import Searches, pairwise_kernel, passable_crop
 from mrexplore.paths.moves import DC, DR, move_cost
-from mrexplore.threads import map_threads, thread_count
+from mrexplore.runtime.threads import map_threads, thread_count
 from mrexplore.types import BoolGrid, GridRC
 
 __all__ = [
@@ -173,7 +173,7 @@ def distance_fields(
         has reached all of them. Every finite value is then exact; cells farther from the source than
         every target read ``inf``. None: every cell.
     box:
-        The passable cells' bounding box (:func:`~mrexplore.boxes.mask_box`), where the caller already
+        The passable cells' bounding box (:func:`~mrexplore.maps.boxes.mask_box`), where the caller already
         has it (a pass over a 4.9 M-cell grid costs milliseconds); None: found here.
     limit:
         Each search stops at this path length (cells); farther cells read ``inf`` (a field read only

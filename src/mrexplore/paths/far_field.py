@@ -25,11 +25,11 @@ from numpy.typing import NDArray
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import maximum_bipartite_matching
 
-from mrexplore.boxes import mask_box
+from mrexplore.maps.boxes import mask_box
 from mrexplore.paths.distance_field import Field, descend_path, distance_fields
 from mrexplore.paths.kernels import Searches, descend_to_seed, passable_crop, search_into, seeded_search
 from mrexplore.paths.portals import PortalField, PortalGraph
-from mrexplore.threads import map_threads
+from mrexplore.runtime.threads import map_threads
 from mrexplore.types import BoolGrid, GridRC
 
 __all__ = ["CoarseGrid", "NearFarField", "coarse_grid", "far_fields", "path_to"]
@@ -517,83 +517,111 @@ def far_fields(
         raise ValueError("far_fields needs a passable cell; use distance_fields on an empty grid")
     sources = np.asarray(sources_rc, np.int64).reshape(-1, 2)
     pooled: CoarseGrid = grid
+    searches = _Searches(passable, pooled, radius_cells)
+    fields = map_threads(lambda src: _one(passable, pooled, src, radius_cells), list(sources))
+    if own_needed is not None and own_rc is not None and len(fields):
+        own_rc = _own_needed(fields, own_rc, own_needed)
+    if must_rc is not None and len(must_rc) and len(fields):
+        _answer_must(searches, sources, fields, must_rc, own_rc)
+    for f, src, goals in zip(fields, sources, own_rc or [], strict=False):
+        mine = np.asarray(goals, np.int64).reshape(-1, 2)
+        unseen = mine[~np.isfinite(f.at(mine))]
+        if len(unseen):
+            for cell, d in zip(unseen, searches.unjoined(src, unseen, f), strict=True):
+                f.known[(int(cell[0]), int(cell[1]))] = float(d)
+    return fields
 
-    def exact(src: NDArray[np.int64], cells: NDArray[np.int64]) -> NDArray[np.float64]:
+
+class _Searches:
+    """The searches :func:`far_fields` makes where the coarse grid leaves a distance at ``inf``."""
+
+    def __init__(self, passable: BoolGrid, pooled: CoarseGrid, radius_cells: int) -> None:
+        self.passable, self.pooled, self.radius_cells = passable, pooled, radius_cells
+        self._finer: list[CoarseGrid | None] = []
+
+    def exact(self, src: NDArray[np.int64], cells: NDArray[np.int64]) -> NDArray[np.float64]:
         """Exact distances from ``src`` at ``cells``: on the grid's shared searches where it was pooled
         from this very array, as every decision's grid is."""
-        if pooled.fine is passable:
-            return pooled.exact_at(src, cells)
-        return distance_fields(passable, src[None], cells)[0].at(cells)
-
-    finer: list[CoarseGrid | None] = []
+        if self.pooled.fine is self.passable:
+            return self.pooled.exact_at(src, cells)
+        return distance_fields(self.passable, src[None], cells)[0].at(cells)
 
     def unjoined(
-        src: NDArray[np.int64], cells: NDArray[np.int64], keep: NearFarField | None = None
+        self, src: NDArray[np.int64], cells: NDArray[np.int64], keep: NearFarField | None = None
     ) -> NDArray[np.float64]:
         """Distances from ``src`` at ``cells`` the grid leaves at ``inf``: a near/far field of ``src`` on
         blocks half as wide (:meth:`CoarseGrid.finer`), exact where that leaves them too: much cheaper than
         searching the floor exactly from the source, the distances so found a fraction of a percent longer
         (docs/performance.md). ``keep``: the source's own field, which keeps the finer one for paths."""
-        if not finer:
-            finer.append(pooled.finer() if pooled.fine is passable else _finer_of(passable, pooled.factor))
+        pooled, passable = self.pooled, self.passable
+        if not self._finer:
+            self._finer.append(pooled.finer() if pooled.fine is passable else _finer_of(passable, pooled.factor))
         out = np.full(len(cells), np.inf)
-        if finer[0] is not None:
-            on_finer = _one(passable, finer[0], src, radius_cells)
+        if self._finer[0] is not None:
+            on_finer = _one(passable, self._finer[0], src, self.radius_cells)
             out = on_finer.at(cells)
             if keep is not None:
                 keep.finer.append(on_finer)
         still = ~np.isfinite(out)
         if still.any():
-            out[still] = exact(src, cells[still])
+            out[still] = self.exact(src, cells[still])
         return out
 
-    fields = map_threads(lambda src: _one(passable, grid, src, radius_cells), list(sources))
-    if own_needed is not None and own_rc is not None and len(fields):
-        shared = np.asarray(own_rc[0], np.int64).reshape(-1, 2)
-        if len(own_rc) != len(fields) or any(not np.array_equal(np.reshape(o, (-1, 2)), shared) for o in own_rc):
-            raise ValueError("own_needed filters the own cells every source shares; give every source the same own_rc")
-        needed = np.asarray(own_needed(np.stack([f.at(shared) for f in fields])), dtype=bool)
-        own_rc = [shared[needed]] * len(fields)
-    if must_rc is not None and len(must_rc) and len(fields):
-        must = np.unique(np.asarray(must_rc, np.int64).reshape(-1, 2), axis=0)
-        unread = ~np.isfinite(np.stack([f.at(must) for f in fields]))
-        # Every (source, cell) pair left at inf needs a search of its own: from the source (one search for
-        # all the cells it leaves) or back from the cell (below). A source standing apart from the coarse
-        # grid's network (its exact radius reaches no block joined to the rest) leaves most cells at inf:
-        # late on a KTH floor one robot of 8 left 17-19 of 18-20 centres, each searched back alone before. As few
-        # searches as cover every pair: a minimum vertex cover of the pairs (:func:`_fewest_searches`).
-        apart, back = _fewest_searches(unread)
-        for i in np.flatnonzero(apart).tolist():
-            cells: NDArray[np.int64] = must[unread[i]]
-            if own_rc is not None and i < len(own_rc):  # its own goals in the same search
-                own = np.asarray(own_rc[i], np.int64).reshape(-1, 2)
-                cells = np.vstack([cells, own[~np.isfinite(fields[i].at(own))]])
-            for cell, d in zip(cells, unjoined(sources[i], cells, fields[i]), strict=True):
-                fields[i].known[(int(cell[0]), int(cell[1]))] = float(d)
-        for cell in must[back]:
-            # From the cell: exact through its passage, on along the sources' own coarse fields (no search of
-            # its own, :func:`_back`); a search of its own on finer blocks, or exact, if need be.
-            key = (int(cell[0]), int(cell[1]))
-            searched = np.array([key in f.known for f in fields])  # found already, from its source
-            d = _back(passable, grid, cell, radius_cells, sources, fields)
-            still = ~np.isfinite(d) & ~searched
-            if still.any():
-                # Ragged free space round the cell joins no block of theirs within the radius. Twice the
-                # radius mostly does, at a fraction of an exact search over the floor.
-                d[still] = _back(passable, grid, cell, 2 * radius_cells, sources, fields)[still]
-                still &= ~np.isfinite(d)
-            if still.any():
-                d[still] = unjoined(cell, sources[still])
-            for f, v, done in zip(fields, d, searched, strict=True):
-                if not done:
-                    f.known[key] = float(v)
-    for f, src, goals in zip(fields, sources, own_rc or [], strict=False):
-        mine = np.asarray(goals, np.int64).reshape(-1, 2)
-        unseen = mine[~np.isfinite(f.at(mine))]
-        if len(unseen):
-            for cell, d in zip(unseen, unjoined(src, unseen, f), strict=True):
-                f.known[(int(cell[0]), int(cell[1]))] = float(d)
-    return fields
+
+def _own_needed(
+    fields: list[NearFarField],
+    own_rc: Sequence[NDArray[np.integer]],
+    own_needed: Callable[[NDArray[np.float64]], NDArray[np.bool_]],
+) -> list[NDArray[np.int64]]:
+    """Every source's own cells, filtered by ``own_needed`` on the distances the fields read there."""
+    shared = np.asarray(own_rc[0], np.int64).reshape(-1, 2)
+    if len(own_rc) != len(fields) or any(not np.array_equal(np.reshape(o, (-1, 2)), shared) for o in own_rc):
+        raise ValueError("own_needed filters the own cells every source shares; give every source the same own_rc")
+    needed = np.asarray(own_needed(np.stack([f.at(shared) for f in fields])), dtype=bool)
+    return [shared[needed]] * len(fields)
+
+
+def _answer_must(
+    searches: _Searches,
+    sources: NDArray[np.int64],
+    fields: list[NearFarField],
+    must_rc: NDArray[np.integer],
+    own_rc: Sequence[NDArray[np.integer]] | None,
+) -> None:
+    """Put in every field's ``known`` the distances at ``must_rc`` its coarse search left at ``inf``."""
+    passable, grid, radius_cells = searches.passable, searches.pooled, searches.radius_cells
+    must = np.unique(np.asarray(must_rc, np.int64).reshape(-1, 2), axis=0)
+    unread = ~np.isfinite(np.stack([f.at(must) for f in fields]))
+    # Every (source, cell) pair left at inf needs a search of its own: from the source (one search for
+    # all the cells it leaves) or back from the cell (below). A source standing apart from the coarse
+    # grid's network (its exact radius reaches no block joined to the rest) leaves most cells at inf:
+    # late on a KTH floor one robot of 8 left 17-19 of 18-20 centres, each searched back alone before. As few
+    # searches as cover every pair: a minimum vertex cover of the pairs (:func:`_fewest_searches`).
+    apart, back = _fewest_searches(unread)
+    for i in np.flatnonzero(apart).tolist():
+        cells: NDArray[np.int64] = must[unread[i]]
+        if own_rc is not None and i < len(own_rc):  # its own goals in the same search
+            own = np.asarray(own_rc[i], np.int64).reshape(-1, 2)
+            cells = np.vstack([cells, own[~np.isfinite(fields[i].at(own))]])
+        for cell, d in zip(cells, searches.unjoined(sources[i], cells, fields[i]), strict=True):
+            fields[i].known[(int(cell[0]), int(cell[1]))] = float(d)
+    for cell in must[back]:
+        # From the cell: exact through its passage, on along the sources' own coarse fields (no search of
+        # its own, :func:`_back`); a search of its own on finer blocks, or exact, if need be.
+        key = (int(cell[0]), int(cell[1]))
+        searched = np.array([key in f.known for f in fields])  # found already, from its source
+        d = _back(passable, grid, cell, radius_cells, sources, fields)
+        still = ~np.isfinite(d) & ~searched
+        if still.any():
+            # Ragged free space round the cell joins no block of theirs within the radius. Twice the
+            # radius mostly does, at a fraction of an exact search over the floor.
+            d[still] = _back(passable, grid, cell, 2 * radius_cells, sources, fields)[still]
+            still &= ~np.isfinite(d)
+        if still.any():
+            d[still] = searches.unjoined(cell, sources[still])
+        for f, v, done in zip(fields, d, searched, strict=True):
+            if not done:
+                f.known[key] = float(v)
 
 
 def path_to(field: Field | NearFarField, passable: BoolGrid, src_rc: GridRC, goal_rc: GridRC) -> NDArray[np.int32]:

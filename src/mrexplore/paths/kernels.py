@@ -19,7 +19,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import Box, mask_box
+from mrexplore.maps.boxes import Box, mask_box
 from mrexplore.types import BoolGrid
 
 __all__ = [
@@ -112,7 +112,7 @@ def unsettle(
 
 
 @nb.njit(cache=True, nogil=True)
-def search_into(
+def search_into(  # noqa: C901 - numba kernel
     best: np.ndarray,
     Wp: int,
     s: int,
@@ -225,7 +225,7 @@ def two_queue_dijkstra(
 
 
 @nb.njit(cache=True, nogil=True)
-def pairwise_kernel(
+def pairwise_kernel(  # noqa: C901 - numba kernel
     start: np.ndarray,
     Wp: int,
     points: np.ndarray,

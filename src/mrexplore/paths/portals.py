@@ -84,7 +84,7 @@ def _sector_nodes(G: np.ndarray, si: int, sj: int, S: int, K: int, out: np.ndarr
 
 
 @nb.njit(cache=True, nogil=True)
-def _refresh(
+def _refresh(  # noqa: C901 - numba kernel
     G: np.ndarray,
     S: int,
     K: int,

@@ -11,10 +11,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import Box, mask_box
 from mrexplore.config import GlobalPlanningConfig, PreprocessConfig, SimConfig
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem, GlobalPlanner
 from mrexplore.local_planning.router import LocalRouter
+from mrexplore.maps.boxes import Box, mask_box
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.paths.distance_field import distance_fields, distances_at, nearest_fields
 from mrexplore.paths.far_field import coarse_grid, finer_side, path_to
@@ -34,8 +34,8 @@ from mrexplore.pipeline.decision import (
 from mrexplore.preprocessing.clustering import Clusters, cluster_frontiers, split_for_team
 from mrexplore.preprocessing.denoise import denoised_frontier_cells
 from mrexplore.preprocessing.frontiers import Frontiers, detect_frontiers
-from mrexplore.threads import map_threads
-from mrexplore.timing import PhaseTimes, timed
+from mrexplore.runtime.threads import map_threads
+from mrexplore.runtime.timing import PhaseTimes, timed
 from mrexplore.types import BoolGrid, CellState, MrExploreError, StateGrid
 
 __all__ = ["ExplorationPipeline"]

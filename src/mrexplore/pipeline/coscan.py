@@ -10,7 +10,6 @@ from functools import partial
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import grown_slices
 from mrexplore.config import CoScanConfig
 from mrexplore.global_planning.coscan import (
     TaskRows,
@@ -22,6 +21,7 @@ from mrexplore.global_planning.coscan import (
     two_opt_tour,
 )
 from mrexplore.global_planning.protocol import AssignmentProblem
+from mrexplore.maps.boxes import grown_slices
 from mrexplore.paths.distance_field import distance_matrix, distances_at, pairwise_distances
 from mrexplore.pipeline.base import ExplorationPipeline
 from mrexplore.pipeline.decision import CandidateQuery, CandidateSet, FarDistances, PosedWork

@@ -78,7 +78,7 @@ class DecisionInput:
     detected from ``state``."""
     barred: Sequence[BoolGrid | None] | None = None
     """Per robot, ``(H, W) bool`` cells whose clusters are kept from that robot alone (its navigation aborted a
-    goal there, :class:`~mrexplore.centre.TeamPlanner`): a cluster centred there reads unreachable for it.
+    goal there, :class:`~mrexplore.mission.centre.TeamPlanner`): a cluster centred there reads unreachable for it.
     None: none."""
 
 

@@ -1,5 +1,7 @@
 """Named strategies, each a complete pipeline, registered and made by name in the manner of Gymnasium's
-``register`` / ``make``: the CLI, the bench and the trainer only ever name a strategy.
+``register`` / ``make``: the CLI, the bench and the trainer only ever name a strategy. A strategy is registered
+by its factory's import path (``module:attribute``), imported only when the strategy is made, so that naming
+and checking strategies imports none of them.
 
 Examples
 --------
@@ -12,19 +14,16 @@ Examples
 
 from __future__ import annotations
 
-import os
+import importlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig
-from mrexplore.global_planning.classical import GeodesicPlanner, NearestPlanner, UtilityPlanner
-from mrexplore.local_planning.router import LocalRouter
-from mrexplore.pipeline.base import ExplorationPipeline
-from mrexplore.pipeline.coscan import CoScanPipeline
-from mrexplore.pipeline.ncm import NcmPipeline
-from mrexplore.pipeline.oracle import OraclePipeline
 from mrexplore.types import MrExploreError
+
+if TYPE_CHECKING:
+    from mrexplore.pipeline.base import ExplorationPipeline
 
 __all__ = [
     "NO_LOCAL_SUFFIX",
@@ -35,6 +34,8 @@ __all__ = [
     "strategy_names",
     "make_strategy",
     "policy_for",
+    "NO_PREDICTOR",
+    "TABLE_I",
 ]
 
 NO_LOCAL_SUFFIX = "-nolocal"
@@ -54,8 +55,14 @@ class PipelineConfigs:
     ``none`` (every unknown cell free) or None (the shipped one)."""
 
 
-Factory = Callable[[PipelineConfigs, "str | None"], ExplorationPipeline]
+Factory = Callable[[PipelineConfigs, "str | None"], "ExplorationPipeline"]
 """Builds a strategy's pipeline from its settings and a policy file (None: the shipped one, or no network)."""
+
+NO_PREDICTOR = "none"
+"""``--predictor none``: the predictive strategies take every unknown cell for free."""
+
+TABLE_I = ("hier", "hier-heuristic", "utility", "coscan", "nearest", "ncm", "oracle")
+"""The strategies of the dev set's Table I."""
 
 
 @dataclass(frozen=True)
@@ -63,7 +70,8 @@ class StrategySpec:
     """A registered strategy."""
 
     name: str
-    factory: Factory
+    factory: Factory | str
+    """The factory, or its import path ``module:attribute`` (imported when the strategy is first made)."""
     policy_kind: str | None = None
     """The kind of policy file a learned strategy reads (``hier`` or ``ncm``, which ``--policy KIND=FILE``
     names); None: no network."""
@@ -74,8 +82,11 @@ class StrategySpec:
 _REGISTRY: dict[str, StrategySpec] = {}
 
 
-def register_strategy(name: str, factory: Factory, policy_kind: str | None = None, predictive: bool = False) -> None:
-    """Make ``factory``'s pipeline available as ``name`` to :func:`make_strategy`, the CLI and the bench."""
+def register_strategy(
+    name: str, factory: Factory | str, policy_kind: str | None = None, predictive: bool = False
+) -> None:
+    """Make ``factory``'s pipeline (a callable, or its import path ``module:attribute``) available as ``name``
+    to :func:`make_strategy`, the CLI and the bench."""
     if name in _REGISTRY:
         raise MrExploreError(f"strategy {name!r} is registered already; register it under another name")
     if name.endswith(NO_LOCAL_SUFFIX):
@@ -117,6 +128,14 @@ def policy_for(name: str, policy: str | None) -> str | None:
     return files.get(kind) or None
 
 
+def _factory(spec: StrategySpec) -> Factory:
+    if callable(spec.factory):
+        return spec.factory
+    module, _, attribute = spec.factory.partition(":")
+    factory: Factory = getattr(importlib.import_module(module), attribute)
+    return factory
+
+
 def make_strategy(
     name: str,
     global_cfg: GlobalPlanningConfig | None = None,
@@ -143,175 +162,23 @@ def make_strategy(
         coscan_cfg or CoScanConfig(),
         predictor,
     )
-    pipeline = spec.factory(cfgs, policy_for(spec.name, policy))
+    pipeline = _factory(spec)(cfgs, policy_for(spec.name, policy))
     if not local and pipeline.local is not None:
         pipeline.local = None
         pipeline.name += NO_LOCAL_SUFFIX
     return pipeline
 
 
-# -- the strategies shipped --------------------------------------------------------------------------------
-CENTRE_COMMITMENT = 0.5
-"""Default hysteresis of strategies whose goal is a cluster centre (measured on 6 maps x 2 seeds: utility
-561 mean steps without, 414 with 0.5)."""
-
-
-def _commitment(gp: GlobalPlanningConfig, default: float) -> float:
-    return default if gp.commitment is None else gp.commitment
-
-
-def _nearest(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
-    commitment = _commitment(c.global_, CENTRE_COMMITMENT)
-    return ExplorationPipeline(
-        "nearest", NearestPlanner(), c.preprocess, commitment=commitment, nearest_only=True, distances=c.global_
-    )
-
-
-def _utility(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
-    commitment = _commitment(c.global_, CENTRE_COMMITMENT)
-    return ExplorationPipeline(
-        "utility", UtilityPlanner(c.global_), c.preprocess, commitment=commitment, distances=c.global_
-    )
-
-
-def _hier_heuristic(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
-    # The paper's three layers with explore_lite's cost as the global affinity. No hysteresis by default: a
-    # route already commits the robot to a sequence of targets (measured on 6 maps x 2 seeds: 442 mean
-    # steps without, 480 with commitment 0.5).
-    router = LocalRouter(c.local, c.preprocess)
-    commitment = _commitment(c.global_, 1.0)
-    return ExplorationPipeline(
-        "hier-heuristic", UtilityPlanner(c.global_), c.preprocess, router, commitment, distances=c.global_
-    )
-
-
-NO_PREDICTOR = "none"
-"""``--predictor none``: the predictive strategies take every unknown cell for free."""
-
-
-def loaded_predictor(predictor: str | None) -> tuple[Any, dict[str, str]]:
-    """The map predictor ``predictor`` names (a file; None: the shipped one; ``none``: no network) and what a
-    mission's record says of it."""
-    if predictor == NO_PREDICTOR:
-        return None, {"path": NO_PREDICTOR, "sha256": ""}
-    from mrexplore.prediction.network import load_predictor
-
-    loaded = load_predictor(predictor)
-    return loaded, loaded.describe()
-
-
-def _hier_predict_heuristic(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
-    # hier-heuristic whose global cost also rewards the new area predicted beyond each cluster.
-    from mrexplore.global_planning.predictive import PredictiveUtilityPlanner
-
-    predictor, info = loaded_predictor(c.predictor)
-    router = LocalRouter(c.local, c.preprocess)
-    commitment = _commitment(c.global_, 1.0)
-    pipeline = ExplorationPipeline(
-        "hier-predict-heuristic",
-        PredictiveUtilityPlanner(predictor, c.global_),
-        c.preprocess,
-        router,
-        commitment,
-        distances=c.global_,
-    )
-    pipeline.predictor = info
-    return pipeline
-
-
-INFERENCE_ENV = "MREXPLORE_INFERENCE"
-"""``numpy`` (default): the learned strategies decide with the NumPy networks, no torch; ``torch``: with the
-torch modules they were trained as (to compare the two, ``benchmarks/inference_parity.py``)."""
-
-
-def _torch_inference() -> bool:
-    value = os.environ.get(INFERENCE_ENV, "numpy")
-    if value not in ("numpy", "torch"):
-        raise MrExploreError(f"{INFERENCE_ENV}={value!r} is not an inference backend; set it to numpy or torch")
-    return value == "torch"
-
-
-def _loaded_policy(kind: str, policy: str | None) -> tuple[Any, dict[str, str]]:
-    """The network of a learned strategy's policy file (``kind`` hier or ncm; None: the shipped one), NumPy's
-    or torch's by :data:`INFERENCE_ENV`, and what a mission's record says of the file."""
-    from pathlib import Path
-
-    from mrexplore.global_planning.learned.policy_file import LoadedPolicy, load_ncm_policy_np, load_policy_np
-
-    path = Path(policy) if policy else None
-    loaded: LoadedPolicy[Any]
-    if _torch_inference():
-        from mrexplore.global_planning.learned.checkpoint import load_ncm_policy, load_policy
-
-        loaded = load_policy(path) if kind == "hier" else load_ncm_policy(path)
-    else:
-        loaded = load_policy_np(path) if kind == "hier" else load_ncm_policy_np(path)
-    info = {"path": str(loaded.path), "sha256": loaded.sha256, "code_version": str(loaded.meta["code_version"])}
-    return loaded.net, info
-
-
-def _hier(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
-    # The paper's three layers with the learned global layer (mGNN affinities, Hungarian decoding); a team under
-    # learned_min_robots decides as hier-heuristic.
-    from mrexplore.global_planning.learned.policy import LearnedPlanner
-
-    net, info = _loaded_policy("hier", policy)
-    predictor, predictor_info = loaded_predictor(c.predictor) if net.cfg.reads_prediction else (None, None)
-    planner = LearnedPlanner(net, c.global_, predictor=predictor, min_robots=c.global_.learned_min_robots)
-    router = LocalRouter(c.local, c.preprocess)
-    commitment = _commitment(c.global_, 1.0)
-    pipeline = ExplorationPipeline("hier", planner, c.preprocess, router, commitment, policy=info, distances=c.global_)
-    pipeline.predictor = predictor_info  # a policy that reads the predicted gain: the predictor it ran
-    return pipeline
-
-
-def _hier_predict(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
-    # hier's learned residual over hier-predict-heuristic's cost: the shipped policy and the predictor together.
-    from mrexplore.global_planning.learned.policy import LearnedPlanner
-
-    net, info = _loaded_policy("hier", policy)
-    predictor, predictor_info = loaded_predictor(c.predictor)
-    planner = LearnedPlanner(
-        net, c.global_, "learned-predict", predictor=predictor, gain_cost=True, min_robots=c.global_.learned_min_robots
-    )
-    router = LocalRouter(c.local, c.preprocess)
-    commitment = _commitment(c.global_, 1.0)
-    pipeline = ExplorationPipeline(
-        "hier-predict", planner, c.preprocess, router, commitment, policy=info, distances=c.global_
-    )
-    pipeline.predictor = predictor_info
-    return pipeline
-
-
-def _ncm(name: str, sample: bool = False, match: bool = False) -> Factory:
-    def make(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
-        # NeuralCoMapping re-implemented: no hysteresis (it replans every robot every decision), no local
-        # layer (each robot drives to its node).
-        from mrexplore.global_planning.learned.ncm_planner import NcmPlanner
-
-        net, info = _loaded_policy("ncm", policy)
-        planner = NcmPlanner(net, sample=sample, name=name, match=match)
-        return NcmPipeline(name, planner, c.preprocess, policy=info, distances=c.global_)
-
-    return make
-
-
-def _coscan(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
-    return CoScanPipeline("coscan", GeodesicPlanner(), c.preprocess, distances=c.global_, coscan=c.coscan)
-
-
-def _oracle(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
-    return OraclePipeline("oracle", NearestPlanner(), c.preprocess, goals_are_frontiers=False, distances=c.global_)
-
-
-register_strategy("hier", _hier, policy_kind="hier")
-register_strategy("hier-heuristic", _hier_heuristic)
-register_strategy("hier-predict-heuristic", _hier_predict_heuristic, predictive=True)
-register_strategy("hier-predict", _hier_predict, policy_kind="hier", predictive=True)
-register_strategy("nearest", _nearest)
-register_strategy("utility", _utility)
-register_strategy("coscan", _coscan)
-register_strategy("ncm", _ncm("ncm"), policy_kind="ncm")
-register_strategy("ncm-sampled", _ncm("ncm-sampled", sample=True), policy_kind="ncm")
-register_strategy("ncm-matched", _ncm("ncm-matched", match=True), policy_kind="ncm")
-register_strategy("oracle", _oracle)
+# -- the strategies shipped (their factories: :mod:`mrexplore.pipeline.strategies`) ---------------------------
+_SHIPPED = "mrexplore.pipeline.strategies:"
+register_strategy("hier", _SHIPPED + "hier", policy_kind="hier")
+register_strategy("hier-heuristic", _SHIPPED + "hier_heuristic")
+register_strategy("hier-predict-heuristic", _SHIPPED + "hier_predict_heuristic", predictive=True)
+register_strategy("hier-predict", _SHIPPED + "hier_predict", policy_kind="hier", predictive=True)
+register_strategy("nearest", _SHIPPED + "nearest")
+register_strategy("utility", _SHIPPED + "utility")
+register_strategy("coscan", _SHIPPED + "coscan")
+register_strategy("ncm", _SHIPPED + "ncm", policy_kind="ncm")
+register_strategy("ncm-sampled", _SHIPPED + "ncm_sampled", policy_kind="ncm")
+register_strategy("ncm-matched", _SHIPPED + "ncm_matched", policy_kind="ncm")
+register_strategy("oracle", _SHIPPED + "oracle")

@@ -24,8 +24,8 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
+from mrexplore.runtime.weights_archive import HEADER_MEMBER, WEIGHT_PREFIX, file_sha256, weights_digest
 from mrexplore.types import CellState, MrExploreError, StateGrid
-from mrexplore.weights_archive import HEADER_MEMBER, WEIGHT_PREFIX, file_sha256, weights_digest
 
 __all__ = [
     "PREDICTOR_FORMAT",

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import mask_box
 from mrexplore.config import PreprocessConfig, SensorConfig
+from mrexplore.maps.boxes import mask_box
 from mrexplore.preprocessing.frontiers import Frontiers, closing_reach
 from mrexplore.preprocessing.onboard import OnBoardGrid
 from mrexplore.preprocessing.reconstruction import CentreMap

@@ -8,7 +8,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import cells_of, grown_slices, mask_box
+from mrexplore.maps.boxes import cells_of, grown_slices, mask_box
 from mrexplore.types import BoolGrid, CellState, StateGrid
 
 __all__ = [

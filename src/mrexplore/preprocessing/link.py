@@ -21,8 +21,8 @@ from mrexplore.preprocessing.transmission import (
     TransmissionTotals,
     occupancy_grid_bytes,
 )
+from mrexplore.runtime.threads import map_threads
 from mrexplore.sim.belief import Belief
-from mrexplore.threads import map_threads
 from mrexplore.types import CellState, StateGrid
 
 __all__ = ["TeamLink"]

@@ -15,8 +15,8 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import Box, box_union, grown_slices, mask_box
 from mrexplore.config import SensorConfig
+from mrexplore.maps.boxes import Box, box_union, grown_slices, mask_box
 from mrexplore.preprocessing.frontiers import close_unknown_holes, closing_reach
 from mrexplore.preprocessing.scanline_fill import (
     joined_in_box,

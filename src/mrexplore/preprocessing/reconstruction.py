@@ -17,7 +17,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import Box, box_union, grown_slices, mask_box
+from mrexplore.maps.boxes import Box, box_union, grown_slices, mask_box
 from mrexplore.preprocessing.frontiers import Frontiers, close_unknown_holes, closing_reach, redetect_frontiers
 from mrexplore.preprocessing.scanline_fill import mark_coded_cells, refill_box, scanline_fill
 from mrexplore.preprocessing.sparse_codec import decode, peek
@@ -156,7 +156,7 @@ def _updated_cells(cells: np.ndarray, changed: np.ndarray, codes: np.ndarray) ->
 
 
 def _union(a: Box | None, b: Box | None) -> Box | None:
-    """:func:`~mrexplore.boxes.box_union` where ``b`` may be None too."""
+    """:func:`~mrexplore.maps.boxes.box_union` where ``b`` may be None too."""
     return a if b is None else box_union(a, b)
 
 

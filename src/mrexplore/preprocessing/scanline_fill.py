@@ -191,7 +191,7 @@ def joined_to_label(
 
 
 @nb.njit(cache=True)
-def kept_in_label(
+def kept_in_label(  # noqa: C901 - numba kernel
     state: np.ndarray, labels: np.ndarray, box: tuple[int, int, int, int], label: int, reach: int
 ) -> bool:  # pragma: no cover - numba
     """:func:`joined_to_label` where free cells of ``box`` may also have stopped being free: whether every

@@ -198,7 +198,7 @@ def _block(quiet: np.ndarray, c: int) -> None:  # pragma: no cover - numba
 
 
 @nb.njit(cache=True, nogil=True)
-def _code_box(
+def _code_box(  # noqa: C901 - numba kernel
     mode: int,
     P: np.ndarray,
     B: np.ndarray,

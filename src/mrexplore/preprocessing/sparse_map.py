@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import Box
+from mrexplore.maps.boxes import Box
 from mrexplore.preprocessing.scanline_fill import coded_cells, neighbour_codes_kernel, pick_seeds
 from mrexplore.types import CellState, GridRC, StateGrid  # noqa: F401 - CellState: the examples use it
 

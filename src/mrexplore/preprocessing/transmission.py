@@ -18,7 +18,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import Box, box_union
+from mrexplore.maps.boxes import Box, box_union
 from mrexplore.maps.occupancy_grid import OCCUPANCY_VALUES
 from mrexplore.preprocessing.onboard import OnBoardGrid
 from mrexplore.preprocessing.sparse_codec import BASELINE_HEADER_BYTES, encode
@@ -50,7 +50,7 @@ _EMPTY: Box = (0, 0, 0, 0)
 
 
 @nb.njit(cache=True, nogil=True)
-def _ros_box(state: np.ndarray, lut: np.ndarray, unknown: int) -> np.ndarray:  # pragma: no cover - numba
+def _ros_box(state: np.ndarray, lut: np.ndarray, unknown: int) -> np.ndarray:  # pragma: no cover  # noqa: C901 - numba kernel
     """The ROS values (``lut`` of each state) of the bounding box of the cells that are not ``unknown``,
     flattened row by row; empty when every cell is unknown. The box's rows and columns are found by scans
     that stop at the first known cell, then the box is written in one pass, where numpy's comparison, the

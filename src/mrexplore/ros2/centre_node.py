@@ -1,5 +1,5 @@
 """``mrexplore ros2 centre``: the team's computing centre as a ROS 2 node, a thin adapter around
-:class:`~mrexplore.centre.TeamPlanner`.
+:class:`~mrexplore.mission.centre.TeamPlanner`.
 
 Topics (``NAME`` is each robot's name; every topic can be renamed in the deployment file):
 
@@ -32,9 +32,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.centre import NavState, TeamPlanner
 from mrexplore.config import PreprocessConfig
 from mrexplore.maps.frame import GridFrame
+from mrexplore.mission.centre import NavState, TeamPlanner
 from mrexplore.pipeline import ExplorationPipeline
 from mrexplore.preprocessing.sparse_codec import peek
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap

@@ -45,6 +45,7 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
+from mrexplore.config.schema import Checked, OneOf, at_least, config_from_dict, is_finite, positive, require
 from mrexplore.maps.frame import GridFrame
 from mrexplore.maps.occupancy_grid import FrameOffset
 from mrexplore.types import MrExploreError
@@ -58,25 +59,24 @@ _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 
 
 @dataclass(frozen=True)
-class TeamGrid:
+class TeamGrid(Checked):
     """The team's grid in the team frame: its lower-left corner, size (metres) and cell size."""
 
     x0: float = -25.0
+    """Left edge of the team grid in the team frame, metres."""
     y0: float = -25.0
+    """Bottom edge of the team grid in the team frame, metres."""
     width: float = 50.0
+    """Extent along x, metres."""
     height: float = 50.0
+    """Extent along y, metres."""
     resolution: float = 0.1
+    """Cell size of the team grid, metres."""
+
+    _constraints = {"width": positive("metres"), "height": positive("metres"), "resolution": positive("metres")}
 
     def frame(self, max_cells: int) -> GridFrame:
-        """The grid's :class:`GridFrame`; one line naming the problem where it has no cells or too many."""
-        for key in ("x0", "y0", "width", "height", "resolution"):
-            if not math.isfinite(getattr(self, key)):
-                raise MrExploreError(f"team grid {key} must be a finite number, got {getattr(self, key)}")
-        if self.width <= 0 or self.height <= 0 or self.resolution <= 0:
-            raise MrExploreError(
-                f"team grid must have a size and a cell size > 0, got {self.width} x {self.height} m at "
-                f"{self.resolution} m"
-            )
+        """The grid's :class:`GridFrame`; one line naming the problem where it has too many cells."""
         # Rounded first: 8.5 m at 0.1 m is 85 cells, not the 86 of ceil(85.00000000000001).
         h, w = (math.ceil(round(extent / self.resolution, 6)) for extent in (self.height, self.width))
         if h * w > max_cells:
@@ -88,25 +88,39 @@ class TeamGrid:
 
 
 @dataclass(frozen=True)
-class RobotEntry:
+class RobotEntry(Checked):
     """One robot of the deployment: its name, index (its place in the list), frame and topics."""
 
     name: str
+    """The robot's name: letters, digits and _, from a letter (a ROS name); its topics' namespace."""
     index: int
+    """Its place in the team, from 0 (the order of the deployment's list)."""
     offset: FrameOffset = FrameOffset()
+    """Where its map frame lies in the team frame: x, y (metres), yaw (radians)."""
     frame: str = "map"
+    """The frame of its map, pose and goals."""
     base_frame: str = "base_link"
     """The robot's body frame, for ``pose_type: tf``."""
     pose_type: str = "pose_with_covariance"
+    """How its pose is read: ``pose_with_covariance`` (AMCL, slam_toolbox), ``odometry`` or ``tf``."""
     map_topic: str = ""
+    """Its occupancy grid (default ``/NAME/map``)."""
     pose_topic: str = ""
+    """Its pose (default ``/NAME/pose``)."""
     goal_topic: str = ""
+    """Where its goals are sent (default ``/NAME/goal_pose``)."""
     nav_status_topic: str = ""
+    """Nav2's goal status (default ``/NAME/navigate_to_pose/_action/status``)."""
     frontiers_topic: str = ""
     """Where the robot's sparse frontier messages are read (default ``/mrexplore/NAME/frontiers``, where its
     node publishes them; a relay in between republishes them elsewhere)."""
 
-    def __post_init__(self) -> None:
+    _constraints = {"index": at_least(0), "pose_type": OneOf(POSE_TYPES)}
+
+    def _validate(self) -> None:
+        require(
+            bool(_NAME.match(self.name)), "robot name", "letters, digits and _ (a ROS name), from a letter", self.name
+        )
         defaults = {
             "frontiers_topic": f"/mrexplore/{self.name}/frontiers",
             "map_topic": f"/{self.name}/map",
@@ -124,19 +138,34 @@ class RobotEntry:
 
 
 @dataclass(frozen=True)
-class Deployment:
+class Deployment(Checked):
     """What the nodes of one team share (module docstring)."""
 
     robots: tuple[RobotEntry, ...]
+    """The team, in order: each a name, or a mapping of a :class:`RobotEntry`'s fields."""
     team_frame: str = "map"
+    """The frame of the team map and the markers."""
     team_grid: TeamGrid = field(default_factory=TeamGrid)
+    """The team's grid in the team frame."""
     round_period_s: float = 1.0
+    """The centre asks for the robots' maps this often, seconds."""
     round_timeout_s: float = 0.5
+    """And decides on what arrived within this, seconds."""
     lost_after_s: float = 5.0
+    """A robot silent this long gets no goal (its map stays), seconds."""
     blacklist_s: float = 30.0
+    """An aborted goal's clusters are kept from that robot this long, seconds."""
     replan_s: float = 10.0
+    """A full decision at least this often, seconds."""
     min_replan_s: float = 1.0
+    """A goal already seen is driven on to until this passed since a decision, seconds."""
     reliable: bool = True
+    """QoS of the frontier messages (false: best effort)."""
+
+    _constraints = {
+        key: positive("seconds")
+        for key in ("round_period_s", "round_timeout_s", "lost_after_s", "blacklist_s", "replan_s", "min_replan_s")
+    }
 
     def robot(self, name: str) -> RobotEntry:
         """The entry of robot ``name``; one line naming the team's robots where it has none."""
@@ -163,24 +192,12 @@ class Deployment:
         for name in names:
             if names.count(name) > 1:
                 raise MrExploreError(f"{what} names robot {name!r} twice; give each robot its own name")
-        grid_data = data.get("team_grid", {})
-        if not isinstance(grid_data, dict) or set(grid_data) - {f.name for f in fields(TeamGrid)}:
-            raise MrExploreError(f"{what}: team_grid takes x0, y0, width, height, resolution (metres)")
-        kwargs: dict[str, Any] = {}
-        for key in ("round_period_s", "round_timeout_s", "lost_after_s", "blacklist_s", "replan_s", "min_replan_s"):
-            if key in data:
-                value = _number(data[key], key, what)
-                if value <= 0:
-                    raise MrExploreError(f"{what}: {key} must be > 0 seconds, got {value}")
-                kwargs[key] = value
-        if "reliable" in data:
-            if not isinstance(data["reliable"], bool):
-                raise MrExploreError(f"{what}: reliable must be true or false, got {data['reliable']!r}")
-            kwargs["reliable"] = data["reliable"]
-        if "team_frame" in data:
-            kwargs["team_frame"] = str(data["team_frame"])
-        team_grid = TeamGrid(**{k: _number(v, f"team_grid.{k}", what) for k, v in grid_data.items()})
-        return cls(robots, team_grid=team_grid, **kwargs)
+        settings = {k: v for k, v in data.items() if k not in ("robots", "team_grid")}
+        try:
+            team_grid = config_from_dict(TeamGrid, data.get("team_grid", {}), "team_grid.")
+            return cls(robots, team_grid=team_grid, **settings)
+        except MrExploreError as exc:
+            raise MrExploreError(f"{what}: {exc}") from None
 
     def to_dict(self) -> dict[str, Any]:
         """The deployment as :meth:`from_dict` reads it (a deployment file's contents)."""
@@ -211,44 +228,33 @@ class Deployment:
         return cls.from_dict({"robots": names, "team_grid": team_grid.__dict__, **kwargs})
 
 
-def _number(value: Any, key: str, what: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise MrExploreError(f"{what}: {key} must be a finite number, got {value!r}")
-    return float(value)
-
-
 def _robot(entry: Any, index: int, what: str) -> RobotEntry:
     if isinstance(entry, str):
         entry = {"name": entry}
     if not isinstance(entry, dict) or "name" not in entry:
         raise MrExploreError(f"{what}: robot {index + 1} must be a name or a mapping with a name")
     name = str(entry["name"])
-    if not _NAME.match(name):
-        raise MrExploreError(f"{what}: robot name {name!r} must be letters, digits and _ (a ROS name), from a letter")
     allowed = {f.name for f in fields(RobotEntry)} - {"index"}
     unknown = sorted(set(entry) - allowed)
     if unknown:
         raise MrExploreError(
             f"{what}: robot {name} has unknown setting {unknown[0]!r}; known: {', '.join(sorted(allowed))}"
         )
-    kwargs = {k: v for k, v in entry.items() if k not in ("name", "offset")}
-    for key, value in kwargs.items():
-        if not isinstance(value, str):
-            raise MrExploreError(f"{what}: robot {name}'s {key} must be text, got {value!r}")
-    if kwargs.get("pose_type", POSE_TYPES[0]) not in POSE_TYPES:
-        raise MrExploreError(
-            f"{what}: robot {name}'s pose_type must be one of {', '.join(POSE_TYPES)}, got {kwargs['pose_type']!r}"
-        )
     offset = entry.get("offset", [0.0, 0.0, 0.0])
-    if not isinstance(offset, list) or len(offset) != 3:
+    if not isinstance(offset, list) or len(offset) != 3 or not all(is_finite(v) for v in offset):
         raise MrExploreError(f"{what}: robot {name}'s offset must be [x, y, yaw] (metres, radians), got {offset!r}")
-    x, y, yaw = (_number(v, f"robot {name}'s offset", what) for v in offset)
-    return RobotEntry(name, index, FrameOffset(x, y, yaw), **kwargs)
+    kwargs = {k: v for k, v in entry.items() if k not in ("name", "offset")}
+    try:
+        return RobotEntry(name, index, FrameOffset(*(float(v) for v in offset)), **kwargs)
+    except MrExploreError as exc:
+        raise MrExploreError(
+            f"{what}: robot {name}'s {exc}" if not str(exc).startswith("robot name") else f"{what}: {exc}"
+        ) from None
 
 
 def read_deployment(path: str | Path) -> Deployment:
     """The :class:`Deployment` of a YAML file; any problem is one line naming the file."""
-    from mrexplore.safe_yaml import load_yaml_file
+    from mrexplore.config.safe_yaml import load_yaml_file
 
     p = Path(path)
     if not p.is_file():

@@ -9,8 +9,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.boxes import Box, box_union, grown_slices
 from mrexplore.config import SensorConfig
+from mrexplore.maps.boxes import Box, box_union, grown_slices
 from mrexplore.types import BoolGrid, CellState, StateGrid
 
 __all__ = ["Belief", "logit", "classify", "merge_beliefs"]

@@ -120,7 +120,7 @@ class EpisodeMeasures:
     lower_bound_steps: int = 0
     """Steps no planner could beat from these starts (see :func:`lower_bound_steps`)."""
     peak_mb: float = 0.0
-    """Peak resident memory of the process during the mission, MB (see :mod:`mrexplore.memory`)."""
+    """Peak resident memory of the process during the mission, MB (see :mod:`mrexplore.runtime.memory`)."""
     onboard_ms_median: float = 0.0
     """One robot's on-board work in a round (its grid brought up to date, closed and coded, its messages
     built), ms: the median over the robots and rounds that sent a map."""

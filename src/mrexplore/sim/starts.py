@@ -11,7 +11,7 @@ from mrexplore.maps.ground_truth import GroundTruthMap, free_components
 from mrexplore.paths.distance_field import distance_field
 from mrexplore.types import MrExploreError, WorldXY
 
-__all__ = ["draw_starts", "starts_from_xy"]
+__all__ = ["draw_starts", "starts_from_xy", "team_starts"]
 
 
 def starts_from_xy(truth: GroundTruthMap, starts_xy: Sequence[WorldXY]) -> NDArray[np.int32]:
@@ -67,3 +67,32 @@ def draw_starts(
         radius *= 2
     others = near[rng.choice(len(near), size=n_robots - 1, replace=False)] if n_robots > 1 else near[:0]
     return np.vstack([np.asarray([first], dtype=np.int32), others.astype(np.int32)])
+
+
+def team_starts(
+    truth: GroundTruthMap, starts_xy: Sequence[WorldXY], robots: int, spread_m: float, seed: int
+) -> NDArray[np.int32] | None:
+    """A team's starts from the points a user gave: one per robot as given, or one that the team is drawn
+    near (within ``spread_m``, from ``seed``); None where none was given (the mission draws them). Two
+    points alike, two robots in one cell, or a count that is neither 1 nor ``robots`` is one line.
+
+    Examples
+    --------
+    >>> from mrexplore.maps.frame import GridFrame
+    >>> occupied = np.ones((5, 5), bool); occupied[1:4, 1:4] = False
+    >>> truth = GroundTruthMap(occupied=occupied, frame=GridFrame(5, 5, 1.0, (0.0, 0.0)), name="room")
+    >>> team_starts(truth, [(1.5, 3.5), (3.5, 1.5)], 2, 1.0, 0).tolist()
+    [[1, 1], [3, 3]]
+    """
+    if not starts_xy:
+        return None
+    if len(set(starts_xy)) != len(starts_xy):
+        raise MrExploreError("--start gives the same point twice; give each robot its own start")
+    given = starts_from_xy(truth, starts_xy)
+    if len({tuple(rc) for rc in given.tolist()}) != len(given):
+        raise MrExploreError("--start puts two robots in one cell; give starts at least one cell apart")
+    if len(given) == robots:
+        return given
+    if len(given) == 1:
+        return draw_starts(truth, robots, spread_m, np.random.default_rng(seed), tuple(given[0]))
+    raise MrExploreError(f"--start must be given once or once per robot ({robots}), got {len(given)}")

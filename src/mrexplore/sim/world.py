@@ -11,9 +11,9 @@ from numpy.typing import NDArray
 
 from mrexplore.config import SimConfig
 from mrexplore.maps.ground_truth import GroundTruthMap, explorable_region
+from mrexplore.runtime.threads import map_threads
 from mrexplore.sim.belief import Belief, logit
 from mrexplore.sim.lidar import Beams, apply_scan
-from mrexplore.threads import map_threads
 from mrexplore.types import BoolGrid
 
 __all__ = ["ExplorationSim", "StepResult"]

@@ -35,9 +35,11 @@ def compare_policies(
     if fresh < 0:
         raise MrExploreError(f"--fresh must be >= 0, got {fresh}; pass a count of plans, or 0 for validation")
     cfg = TrainConfig() if robots is None else TrainConfig(val_robots=robots)
-    plans = [f"{cfg.plans}:{FRESH_SEED0 + i}" for i in range(fresh)] or None
+    plans = [f"{cfg.episodes.plans}:{FRESH_SEED0 + i}" for i in range(fresh)] or None
     maps, ref, ref_cov = validate_policy(None, cfg, train_dir, workers, plans)
-    lines = [f"{len(maps)} {'fresh' if plans else 'validation'} maps, {cfg.val_robots} robots, {cfg.resolution_m} m"]
+    lines = [
+        f"{len(maps)} {'fresh' if plans else 'validation'} maps, {cfg.val_robots} robots, {cfg.episodes.resolution_m} m"
+    ]
     first: np.ndarray | None = None
     per_map: list[dict[str, object]] = []
     for name, policy in [("hier-heuristic", None), *[(str(p), p) for p in policies]]:

@@ -21,10 +21,10 @@ from mrexplore.global_planning.learned.policy import LearnedPlanner, PolicyStep
 from mrexplore.maps.loaders import load_map_shared
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import ExplorationPipeline, NcmPipeline, make_strategy
-from mrexplore.pipeline.registry import loaded_predictor
+from mrexplore.pipeline.strategies import loaded_predictor
 from mrexplore.prediction.network import MapPredictor
+from mrexplore.runtime.threads import THREADS_ENV
 from mrexplore.sim.measures import steps_to_coverage
-from mrexplore.threads import THREADS_ENV
 from mrexplore.training.expert import (
     ExpertLabel,
     candidate_assignments,
@@ -81,7 +81,7 @@ class EpisodeJob:
     sim: SimConfig | None = None
     """Sensor, motion and reward of the episode (None: defaults); the team size is ``robots``."""
     mission: MissionConfig | None = None
-    """Replanning and faults of the episode (None: defaults); the budget is ``cfg.max_steps`` and
+    """Replanning and faults of the episode (None: defaults); the budget is ``cfg.episodes.max_steps`` and
     failures of robots beyond the team are left out."""
     predictor: str | None = None
     """The map predictor of a policy that reads the predicted gain: a file, ``none`` (every unknown cell
@@ -149,14 +149,14 @@ def ncm_pipeline(planner: NcmPlanner) -> ExplorationPipeline:
 
 def episode_mission(job: EpisodeJob, pipeline: ExplorationPipeline) -> Mission:
     """The job's mission: its map, team and settings, the trainer's step budget."""
-    truth = load_map_shared(job.map_spec, MapConfig(resolution_m=job.cfg.resolution_m))
+    truth = load_map_shared(job.map_spec, MapConfig(resolution_m=job.cfg.episodes.resolution_m))
     base = job.mission or MissionConfig()
     failures = tuple(f for f in base.faults.robot_failures if f[0] < job.robots)
     # Training reads steps and areas, never Table II's bytes: their grid baselines are left uncounted (the
     # same missions, cheaper rounds).
     cfg = replace(
         base,
-        max_steps=job.cfg.max_steps,
+        max_steps=job.cfg.episodes.max_steps,
         faults=replace(base.faults, robot_failures=failures),
         baseline_bytes=False,
     )
@@ -276,7 +276,7 @@ def _run_ncm(job: EpisodeJob, net: NcmActorCritic) -> dict[str, Any]:
     record: list[NcmStep] = []
     planner = NcmPlanner(net.actor, sample=True, critic=net.critic, record=record)
     m = episode_mission(job, ncm_pipeline(planner))
-    cell_m2 = job.cfg.resolution_m**2
+    cell_m2 = job.cfg.episodes.resolution_m**2
     rewards: list[float] = []
     discounts: list[float] = []
     last_known, last_step = m.sim.known_cells, m.steps
@@ -330,10 +330,10 @@ def training_jobs(
     size and a seed, all drawn from ``rng``."""
     jobs: list[EpisodeJob] = []
     for _ in range(n):
-        if not maps or rng.random() < cfg.generated_share:
-            spec = f"{cfg.plans}:{int(rng.integers(0, VAL_SEED0))}"
+        if not maps or rng.random() < cfg.episodes.generated_share:
+            spec = f"{cfg.episodes.plans}:{int(rng.integers(0, VAL_SEED0))}"
         else:
             spec = maps[int(rng.integers(len(maps)))]
-        robots = int(rng.integers(cfg.robots_min, cfg.robots_max + 1))
+        robots = int(rng.integers(cfg.episodes.robots_min, cfg.episodes.robots_max + 1))
         jobs.append(EpisodeJob(kind, spec, robots, int(rng.integers(0, 2**31 - 1)), weights, cfg, len(jobs)))
     return jobs

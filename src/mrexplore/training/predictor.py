@@ -20,21 +20,22 @@ import numpy as np
 import torch
 
 from mrexplore.config import MapConfig, MissionConfig, PredictorTrainConfig, SimConfig, config_to_dict
-from mrexplore.csv_append import append_row, drop_partial_tail, keep_rows
 from mrexplore.maps.loaders import load_map_shared
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import make_strategy
 from mrexplore.prediction.network import PREDICTOR_FORMAT, belief_channels, pool_factor
 from mrexplore.prediction.targets import pooled_targets
-from mrexplore.progress import Progress
-from mrexplore.threads import THREADS_ENV
+from mrexplore.runtime.csv_append import append_row
+from mrexplore.runtime.progress import Progress
+from mrexplore.runtime.threads import THREADS_ENV
+from mrexplore.runtime.weights_archive import code_version, write_weights_archive
+from mrexplore.runtime.workers import JobRunner
 from mrexplore.training.curve import plot_predictor_curve
 from mrexplore.training.episodes import VAL_SEED0, init_worker
 from mrexplore.training.predictor_net import PredictorUNet
+from mrexplore.training.run_folder import RunFolder
 from mrexplore.training.trainer import split_maps
 from mrexplore.types import MrExploreError
-from mrexplore.weights_archive import code_version, write_weights_archive
-from mrexplore.workers import JobRunner
 
 __all__ = [
     "BeliefJob",
@@ -112,9 +113,9 @@ def collect_beliefs(job: BeliefJob) -> dict[str, Any]:
     """The team's belief at ``cfg.moments`` random decisions of one mission (coverage within the range),
     pooled onto the predictor's cells with their labels and masks; plain data for a worker to return."""
     cfg = job.cfg
-    truth = load_map_shared(job.map_spec, MapConfig(resolution_m=cfg.resolution_m))
+    truth = load_map_shared(job.map_spec, MapConfig(resolution_m=cfg.episodes.resolution_m))
     sim_cfg = replace(job.sim or SimConfig(), robots=job.robots)
-    mission = MissionConfig(max_steps=cfg.max_steps, baseline_bytes=False)
+    mission = MissionConfig(max_steps=cfg.episodes.max_steps, baseline_bytes=False)
     states: list[np.ndarray] = []
     last: list[Any] = [None]
 
@@ -128,10 +129,10 @@ def collect_beliefs(job: BeliefJob) -> dict[str, Any]:
     Mission(MissionSpec(truth, strategy, sim_cfg, mission, seed=job.seed), observe, progress=False).run()
     rng = np.random.default_rng([job.seed, 3])
     picks = sorted(rng.choice(len(states), size=min(cfg.moments, len(states)), replace=False).tolist())
-    factor = pool_factor(cfg.resolution_m, cfg.cell_m)
+    factor = pool_factor(cfg.episodes.resolution_m, cfg.cell_m)
     out = BeliefSet([], [], [])
     for i in picks:
-        label, mask = pooled_targets(states[i], ~truth.occupied, cfg.resolution_m, factor, cfg.band_m)
+        label, mask = pooled_targets(states[i], ~truth.occupied, cfg.episodes.resolution_m, factor, cfg.band_m)
         if mask.any():
             out.x.append(belief_channels(states[i], factor).astype(np.float16))
             out.label.append(label)
@@ -146,11 +147,11 @@ def belief_jobs(
     team size and a seed, all drawn from ``rng``."""
     jobs = []
     for i in range(n):
-        if not maps or rng.random() < cfg.generated_share:
-            spec = f"{cfg.plans}:{int(rng.integers(0, VAL_SEED0))}"
+        if not maps or rng.random() < cfg.episodes.generated_share:
+            spec = f"{cfg.episodes.plans}:{int(rng.integers(0, VAL_SEED0))}"
         else:
             spec = maps[int(rng.integers(len(maps)))]
-        robots = int(rng.integers(cfg.robots_min, cfg.robots_max + 1))
+        robots = int(rng.integers(cfg.episodes.robots_min, cfg.episodes.robots_max + 1))
         jobs.append(BeliefJob(spec, robots, int(rng.integers(0, 2**31 - 1)), cfg, sim, i))
     return jobs
 
@@ -253,13 +254,7 @@ def train_predictor(
 ) -> tuple[Path, dict[str, Any]]:
     """Train the map predictor into ``out`` (``predictor.npz``, ``best.npz``, ``beliefs.npz``, ``state.pt``,
     ``log.csv``, ``curve.png``); returns the predictor's path, the kept epoch and its validation loss."""
-    out = Path(out)
-    state_path = out / "state.pt"
-    if state_path.exists() and not resume:
-        raise MrExploreError(f"{out} already holds a training run; pass --resume to continue it, or another --out")
-    if resume and not state_path.exists():
-        raise MrExploreError(f"nothing to resume in {out} (no state.pt); drop --resume to start a run there")
-    out.mkdir(parents=True, exist_ok=True)
+    run = RunFolder(out, resume, minutes, say)
     env = {"config": config_to_dict(cfg), "sim": config_to_dict(sim or SimConfig()), "seed": seed}
     torch.manual_seed(seed)
     net = PredictorUNet(cfg.width)
@@ -267,74 +262,30 @@ def train_predictor(
     rng = np.random.default_rng(seed)
     st = _State()
     if resume:
-        blob = torch.load(state_path, weights_only=True)
+        blob = run.load_state()
         if blob["env"] != env:
             raise MrExploreError(
-                f"{out} was trained with another config; resume with the same --config and --seed, or a new --out"
+                f"{run.out} was trained with another config; resume with the same --config and --seed, or a new --out"
             )
         net.load_state_dict(blob["net"])
         opt.load_state_dict(blob["opt"])
         rng.bit_generator.state = blob["rng"]
         st = _State(**blob["state"])
-        say(f"resuming {out} after epoch {st.epoch} ({st.elapsed_s / 60:.1f} min so far)")
-    log_path = out / "log.csv"
-    drop_partial_tail(log_path)
-    if resume:
-        keep_rows(log_path, st.log_rows)
-    t_start = time.perf_counter() - st.elapsed_s
-    deadline = t_start + minutes * 60 if minutes is not None else math.inf
-
+        say(f"resuming {run.out} after epoch {st.epoch} ({st.elapsed_s / 60:.1f} min so far)")
+    log_path = run.log_path(st.log_rows if resume else None)
+    run.start_clock(st.elapsed_s)
     # collect: beliefs of training and validation missions (once; a resumed run reads them back)
-    beliefs_path = out / "beliefs.npz"
-    if beliefs_path.exists():
-        with np.load(beliefs_path, allow_pickle=False) as z:
-            train_set, val_set = BeliefSet.from_arrays(z, "train"), BeliefSet.from_arrays(z, "val")
-    else:
-        train_maps, val_maps = split_maps(train_dir, cfg.val_missions, cfg.plans)
-        if not train_maps:
-            say("no training DungeonMaps found; collecting on procedural floor plans only")
-        jobs = belief_jobs(cfg.missions, train_maps, cfg, np.random.default_rng([seed, 1]), sim)
-        val_rng = np.random.default_rng([seed, 2])
-        val_jobs = [
-            BeliefJob(m, int(val_rng.integers(cfg.robots_min, cfg.robots_max + 1)), i, cfg, sim, len(jobs) + i)
-            for i, m in enumerate(val_maps)
-        ]
-        train_set, val_set = BeliefSet([], [], []), BeliefSet([], [], [])
-        bar = Progress(len(jobs) + len(val_jobs), "collect beliefs", "missions", progress)
-        env_vars = {THREADS_ENV: "1", "OMP_NUM_THREADS": "1"}
-        with JobRunner(collect_beliefs, workers, ray_address, init_worker, (), env_vars) as runner:
-            results = []
-            for r in runner.run(jobs + val_jobs):
-                results.append(r)
-                bar.update()
-        bar.close()
-        for r in sorted(results, key=lambda r: int(r["index"])):
-            (train_set if r["index"] < len(jobs) else val_set).extend(r["set"])
-        if not len(train_set) or not len(val_set):
-            raise MrExploreError("the collection missions left no belief with unknown cells near a frontier")
-        tmp = out / "beliefs.tmp.npz"
-        arrays: dict[str, Any] = train_set.to_arrays("train") | val_set.to_arrays("val")
-        np.savez_compressed(tmp, **arrays)
-        tmp.replace(beliefs_path)
-        say(f"collected {len(train_set)} training and {len(val_set)} validation beliefs")
-
+    train_set, val_set = _beliefs(run, cfg, train_dir, seed, sim, workers, ray_address, progress)
     bar = Progress(cfg.epochs, "train predictor", "epochs", progress, initial=st.epoch)
     epoch_s = 0.0
     while st.epoch < cfg.epochs:
         now = time.perf_counter()
-        if st.epoch > 0 and now + epoch_s > deadline:
-            say(f"{deadline - now:.0f} s left, under an epoch's {epoch_s:.0f} s; stopping after epoch {st.epoch}")
+        if st.epoch > 0 and now + epoch_s > run.deadline:
+            say(f"{run.deadline - now:.0f} s left, under an epoch's {epoch_s:.0f} s; stopping after epoch {st.epoch}")
             break
         t0 = time.perf_counter()
         # train: fresh random crops each step
-        losses = []
-        for _ in range(cfg.steps_per_epoch):
-            x, y, m = _crops(train_set, cfg.batch, cfg.crop_cells, rng)
-            loss = masked_bce(net(x), y, m)
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
-            losses.append(float(loss.detach()))
+        losses = _train_epoch(net, opt, cfg, train_set, rng)
         crops_per_s = cfg.steps_per_epoch * cfg.batch / (time.perf_counter() - t0)
         # validate: whole held-out beliefs
         val_loss, val_acc, val_iou = _validate(net, val_set)
@@ -343,10 +294,10 @@ def train_predictor(
         if val_loss < st.best_loss:
             st.best_loss, st.best_epoch = val_loss, st.epoch
             meta = {"epoch": st.epoch, "val_loss": val_loss, "val_accuracy": val_acc, "val_iou": val_iou}
-            _save(out / "best.npz", net, cfg, meta)
+            _save(run.out / "best.npz", net, cfg, meta)
         # log
         row: dict[str, Any] = {
-            "time_s": round(time.perf_counter() - t_start, 1), "epoch": st.epoch, "beliefs": len(train_set),
+            "time_s": round(run.elapsed_s, 1), "epoch": st.epoch, "beliefs": len(train_set),
             "loss": float(np.mean(losses)), "val_loss": val_loss, "val_accuracy": val_acc, "val_iou": val_iou,
             "crops_per_s": round(crops_per_s, 1),
         }  # fmt: skip
@@ -355,20 +306,82 @@ def train_predictor(
         bar.detail = f"validation loss {val_loss:.4f}, accuracy {val_acc:.3f}, IoU {val_iou:.3f}"
         bar.update()
         # checkpoint
-        st.elapsed_s = time.perf_counter() - t_start
-        blob = {
-            "env": env, "net": net.state_dict(), "opt": opt.state_dict(), "rng": rng.bit_generator.state,
-            "state": st.__dict__, "code_version": code_version(),
-        }  # fmt: skip
-        tmp = out / "state.pt.tmp"
-        torch.save(blob, tmp)
-        tmp.replace(state_path)
+        st.elapsed_s = run.elapsed_s
+        run.save_state(
+            {
+                "env": env,
+                "net": net.state_dict(),
+                "opt": opt.state_dict(),
+                "rng": rng.bit_generator.state,
+                "state": st.__dict__,
+                "code_version": code_version(),
+            }  # fmt: skip
+        )
         epoch_s = time.perf_counter() - t0
     bar.close()
-    if not (out / "best.npz").exists():
-        raise MrExploreError(
-            f"no epoch finished within the budget; give more --minutes (an epoch took {epoch_s:.0f} s)"
-        )
-    (out / "predictor.npz").write_bytes((out / "best.npz").read_bytes())
-    plot_predictor_curve(log_path, out / "curve.png", st.best_epoch)
-    return out / "predictor.npz", {"epoch": st.best_epoch, "val_loss": st.best_loss}
+    kept = run.keep_best(
+        "predictor.npz", f"no epoch finished within the budget; give more --minutes (an epoch took {epoch_s:.0f} s)"
+    )
+    plot_predictor_curve(log_path, run.out / "curve.png", st.best_epoch)
+    return kept, {"epoch": st.best_epoch, "val_loss": st.best_loss}
+
+
+def _train_epoch(
+    net: PredictorUNet, opt: torch.optim.Optimizer, cfg: PredictorTrainConfig, train_set: BeliefSet, rng: Any
+) -> list[float]:
+    """One epoch of gradient steps, each on fresh random crops; the steps' losses."""
+    losses = []
+    for _ in range(cfg.steps_per_epoch):
+        x, y, m = _crops(train_set, cfg.batch, cfg.crop_cells, rng)
+        loss = masked_bce(net(x), y, m)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        losses.append(float(loss.detach()))
+    return losses
+
+
+def _beliefs(
+    run: RunFolder,
+    cfg: PredictorTrainConfig,
+    train_dir: Path | None,
+    seed: int,
+    sim: SimConfig | None,
+    workers: int,
+    ray_address: str | None,
+    progress: bool | None,
+) -> tuple[BeliefSet, BeliefSet]:
+    """The training and validation beliefs: collected from missions once, then read back from
+    ``beliefs.npz`` (a resumed run's, or a run's whose collection finished before it stopped)."""
+    beliefs_path = run.out / "beliefs.npz"
+    if beliefs_path.exists():
+        with np.load(beliefs_path, allow_pickle=False) as z:
+            return BeliefSet.from_arrays(z, "train"), BeliefSet.from_arrays(z, "val")
+    train_maps, val_maps = split_maps(train_dir, cfg.val_missions, cfg.episodes.plans)
+    if not train_maps:
+        run.say("no training DungeonMaps found; collecting on procedural floor plans only")
+    jobs = belief_jobs(cfg.missions, train_maps, cfg, np.random.default_rng([seed, 1]), sim)
+    val_rng = np.random.default_rng([seed, 2])
+    teams = [int(val_rng.integers(cfg.episodes.robots_min, cfg.episodes.robots_max + 1)) for _ in val_maps]
+    val_jobs = [
+        BeliefJob(m, n, i, cfg, sim, len(jobs) + i) for i, (m, n) in enumerate(zip(val_maps, teams, strict=True))
+    ]
+    train_set, val_set = BeliefSet([], [], []), BeliefSet([], [], [])
+    bar = Progress(len(jobs) + len(val_jobs), "collect beliefs", "missions", progress)
+    env_vars = {THREADS_ENV: "1", "OMP_NUM_THREADS": "1"}
+    with JobRunner(collect_beliefs, workers, ray_address, init_worker, (), env_vars) as runner:
+        results = []
+        for r in runner.run(jobs + val_jobs):
+            results.append(r)
+            bar.update()
+    bar.close()
+    for r in sorted(results, key=lambda r: int(r["index"])):
+        (train_set if r["index"] < len(jobs) else val_set).extend(r["set"])
+    if not len(train_set) or not len(val_set):
+        raise MrExploreError("the collection missions left no belief with unknown cells near a frontier")
+    tmp = run.out / "beliefs.tmp.npz"
+    arrays: dict[str, Any] = train_set.to_arrays("train") | val_set.to_arrays("val")
+    np.savez_compressed(tmp, **arrays)
+    tmp.replace(beliefs_path)
+    run.say(f"collected {len(train_set)} training and {len(val_set)} validation beliefs")
+    return train_set, val_set

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import csv
 import math
-import shutil
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -23,11 +22,12 @@ import numpy as np
 import torch
 
 from mrexplore.config import MissionConfig, SimConfig, TrainConfig, config_to_dict
-from mrexplore.csv_append import append_row, drop_partial_tail, keep_rows
 from mrexplore.global_planning.learned.checkpoint import code_version, save_policy
 from mrexplore.global_planning.learned.features import GraphInputs
-from mrexplore.progress import Progress
-from mrexplore.threads import THREADS_ENV
+from mrexplore.runtime.csv_append import append_row
+from mrexplore.runtime.progress import Progress
+from mrexplore.runtime.threads import THREADS_ENV
+from mrexplore.runtime.workers import JobRunner
 from mrexplore.training.curve import plot_learning_curve
 from mrexplore.training.episodes import (
     FRESH_SEED0,
@@ -42,11 +42,11 @@ from mrexplore.training.episodes import (
     weights_of,
 )
 from mrexplore.training.expert import ExpertLabel
+from mrexplore.training.run_folder import RunFolder
 from mrexplore.training.search import relative_score
 from mrexplore.training.stages import StageContext, TrainState, stages_of
 from mrexplore.training.updates import optimizer
 from mrexplore.types import MrExploreError
-from mrexplore.workers import JobRunner
 
 __all__ = ["train", "validate_policy", "TrainResult", "split_maps", "LOG_COLUMNS", "FRESH_SEED0"]
 
@@ -142,12 +142,10 @@ def _labels_from_blob(blob: Sequence[dict[str, torch.Tensor]]) -> list[ExpertLab
 class _Log:
     """CSV log (always) and TensorBoard (where the optional extra is installed)."""
 
-    def __init__(self, out: Path, keep: int | None = None) -> None:
+    def __init__(self, run: RunFolder, keep: int | None = None) -> None:
         """``keep``: rows a resumed run keeps (those of the stages it saved); a cut last line goes too."""
-        self.path = out / "log.csv"
-        drop_partial_tail(self.path)
-        if keep is not None:
-            keep_rows(self.path, keep)
+        out = run.out
+        self.path = run.log_path(keep)
         self.rows = max(0, len(self.path.read_bytes().splitlines()) - 1) if self.path.exists() else 0
         try:
             from torch.utils.tensorboard import SummaryWriter
@@ -193,63 +191,36 @@ def train(
     def placed(jobs: list[EpisodeJob]) -> list[EpisodeJob]:
         return [replace(j, sim=sim, mission=mission, predictor=predictor) for j in jobs]
 
-    predictor_info = None
-    if cfg.strategy == "hier" and cfg.learned.reads_prediction:
-        from mrexplore.pipeline.registry import loaded_predictor
-
-        predictor_info = loaded_predictor(predictor)[1]  # a file that cannot be read fails before any work
+    predictor_info = _predictor_info(cfg, predictor)  # a file that cannot be read fails before any work
+    if predictor_info is not None:
         env["predictor"] = predictor_info
-
-    out = Path(out)
-    state_path = out / "state.pt"
-    if state_path.exists() and not resume:
-        raise MrExploreError(f"{out} already holds a training run; pass --resume to continue it, or another --out")
-    if resume and not state_path.exists():
-        raise MrExploreError(f"nothing to resume in {out} (no state.pt); drop --resume to start a run there")
-    out.mkdir(parents=True, exist_ok=True)
+    run = RunFolder(out, resume, minutes, say)
     torch.manual_seed(seed)
     net = new_net(cfg)
     opt = optimizer(net, cfg)
-    st = TrainState()
-    data: list[ExpertLabel] = []
     rng = np.random.default_rng(seed)
     stages = stages_of(cfg)
-    if resume:
-        st, data = _restore(state_path, cfg, env, net, opt, rng)
-        done = f"{st.episodes} episodes, {st.elapsed_s / 60:.1f} min so far"
-        say(f"resuming {out} at stage {st.stage} of {len(stages)} ({done})")
-    train_maps, val_maps = split_maps(train_dir, cfg.val_maps, cfg.plans)
+    st, data = _restore(run, cfg, env, net, opt, rng, len(stages)) if resume else (TrainState(), [])
+    train_maps, val_maps = split_maps(train_dir, cfg.val_maps, cfg.episodes.plans)
     if not train_maps:
         say("no training DungeonMaps found; training on procedural floor plans only")
-    log = _Log(out, st.log_rows if resume and st.log_rows >= 0 else None)
-    t_start = time.perf_counter() - st.elapsed_s
-    deadline = t_start + minutes * 60 if minutes is not None else math.inf
+    log = _Log(run, st.log_rows if resume and st.log_rows >= 0 else None)
+    run.start_clock(st.elapsed_s)
     bar = Progress(len(stages), "train", "stages", progress, initial=st.stage)
-    bar.limit_s = deadline - time.perf_counter() if minutes is not None else None
+    bar.limit_s = run.deadline - time.perf_counter() if minutes is not None else None
     with _Runner(workers, ray_address) as runner:
-        ended = [0]
-
-        def episode_ended() -> None:
-            ended[0] += 1
-            bar.detail = f"{stages[min(st.stage, len(stages) - 1)].name}, {ended[0]} episodes"
-            bar.set(bar.n)
-
-        runner.on_result = episode_ended
+        runner.on_result = _episode_counter(bar, stages, st)
 
         def budget_left(n: int) -> int:
             return n if episodes is None else max(0, min(n, episodes - st.episodes))
 
         def validate(weights: bytes | None, kind: JobKind = JobKind.EVAL) -> tuple[float, float, np.ndarray]:
-            """Mean steps and coverage, and the steps to the end and to 99% per map (2 x maps, in order)."""
-            jobs = [EpisodeJob(kind, m, cfg.val_robots, i, weights, cfg, i) for i, m in enumerate(val_maps)]
-            res = runner.results(placed(jobs), math.inf)  # a validation always ends: the budget leaves room
-            per_map = np.array([[r["steps"] for r in res], [r["steps_99"] for r in res]], dtype=np.float64)
-            return float(per_map[0].mean()), float(np.mean([r["coverage"] for r in res])), per_map
+            return _validate_on(runner, placed, cfg, val_maps, weights, kind)
 
         # The budget is a budget: a stage's training episodes stop early enough for its validation to end
         # by the deadline (as long as the last validation took), and no stage starts that has not that time.
         val_s = 0.0
-        train_until = deadline
+        train_until = run.deadline
         ctx = StageContext(
             cfg,
             net,
@@ -264,14 +235,9 @@ def train(
         while st.stage < len(stages):
             stage = stages[st.stage]
             need = stage.min_episodes(cfg)
-            now = time.perf_counter()
-            if now > deadline or (need > 0 and episodes is not None and st.episodes >= episodes):
-                say(f"budget spent before stage {stage.name}; stopping")
+            if _out_of_budget(run, stage.name, st, need, episodes, val_s):
                 break
-            if st.stage > 0 and now + VALIDATION_MARGIN * val_s > deadline:
-                say(f"{deadline - now:.0f} s left, under a validation's {val_s:.0f} s; stopping before {stage.name}")
-                break
-            train_until = deadline - VALIDATION_MARGIN * val_s
+            train_until = run.deadline - VALIDATION_MARGIN * val_s
             if (left := budget_left(need)) < need:
                 # the stage needs more episodes than are left: go on to the stages that fit the budget
                 say(f"{left} episodes left, under {stage.unit}'s {need}; skipping {stage.name}")
@@ -283,67 +249,154 @@ def train(
             row: dict[str, Any] = {"stage": stage.name} | stage.learn(ctx)
             # validate (deterministic decoding, held-out maps) and keep the best
             t_val = time.perf_counter()
-            weights = stage.validation_weights(ctx)
-            row["val_steps_mean"], row["val_coverage_mean"], per_map = validate(weights)
-            chosen_by = "val_steps_mean"
-            if cfg.score == "relative":  # against the yardstick stage (the heuristic for hier), map by map
-                if stage.yardstick:
-                    st.val_ref = per_map.tolist()
-                ref = np.asarray(st.val_ref)
-                row["val_score"] = float(relative_score(per_map[0], per_map[1], ref[0], ref[1]))
-                chosen_by = "val_score"
-            cov_key = "val_coverage_mean"
-            if cfg.strategy == "ncm":  # NCM's own evaluation samples: validate that too (seeded per map)
-                steps_s, cov_s, _ = validate(weights, JobKind.EVAL_SAMPLED)
-                row["val_sampled_steps_mean"], row["val_sampled_coverage_mean"] = steps_s, cov_s
-                if cfg.ncm.select == "sampled":
-                    chosen_by, cov_key = "val_sampled_steps_mean", "val_sampled_coverage_mean"
+            chosen_by, cov_key = _validated(row, stage, ctx, validate)
             val_s = time.perf_counter() - t_val
-            # keep the best: fewest validation steps (or the best score), at no less coverage than the yardstick
-            if stage.yardstick or (row[chosen_by] < st.best_val and row[cov_key] >= st.stage_rows[0][cov_key] - 0.005):
-                st.best_val, st.best_stage = row[chosen_by], stage.name
-                meta = {k: row[k] for k in row if k.startswith("val_")}
-                save_policy(
-                    out / "best.npz",
-                    policy_net(net),
-                    {
-                        "stage": stage.name,
-                        **meta,
-                        "chosen_by": chosen_by,
-                        "train_config": config_to_dict(cfg),
-                        **({"predictor": predictor_info} if predictor_info else {}),
-                    },
-                )
+            _keep_if_best(run, row, stage, ctx, chosen_by, cov_key, predictor_info)
             # log
-            elapsed = time.perf_counter() - t0
-            row["time_s"] = round(time.perf_counter() - t_start, 1)
-            row["episodes"] = st.episodes
-            if row.get("decisions"):
-                row["decisions_per_s"] = round(row["decisions"] / elapsed, 2)
-            st.stage_rows.append(
-                {k: row.get(k) for k in _STAGE_COLUMNS if k in row or not k.startswith(("val_sampled", "val_score"))}
-            )
-            log.row(row, st.stage)
-            say(f"{stage.name}: validation {_validation_text(row)} ({elapsed:.0f} s)")
+            _log_stage(row, st, log, t0, run.elapsed_s)
+            say(f"{stage.name}: validation {_validation_text(row)} ({time.perf_counter() - t0:.0f} s)")
             # checkpoint
             st.stage += 1
-            st.elapsed_s = time.perf_counter() - t_start
+            st.elapsed_s = run.elapsed_s
             st.log_rows = log.rows
-            _checkpoint(state_path, cfg, env, net, opt, st, data, rng)
+            _checkpoint(run, cfg, env, net, opt, st, data, rng)
             bar.update()
     bar.close()
-    shutil.copyfile(out / "best.npz", out / "policy.npz")
-    plot_learning_curve(out / "log.csv", out / "curve.png", cfg.strategy, st.best_stage)
+    return _finish(run, cfg, st)
+
+
+def _predictor_info(cfg: TrainConfig, predictor: str | None) -> dict[str, str] | None:
+    """What the run's record says of the map predictor of a policy that reads one; None for the others."""
+    if not (cfg.strategy == "hier" and cfg.learned.reads_prediction):
+        return None
+    from mrexplore.pipeline.strategies import loaded_predictor
+
+    return loaded_predictor(predictor)[1]
+
+
+def _episode_counter(bar: Progress, stages: Sequence[Any], st: TrainState) -> Callable[[], None]:
+    """What the runner calls as each episode ends: the progress line names the stage and counts episodes."""
+    ended = [0]
+
+    def episode_ended() -> None:
+        ended[0] += 1
+        bar.detail = f"{stages[min(st.stage, len(stages) - 1)].name}, {ended[0]} episodes"
+        bar.set(bar.n)
+
+    return episode_ended
+
+
+def _validate_on(
+    runner: _Runner,
+    placed: Callable[[list[EpisodeJob]], list[EpisodeJob]],
+    cfg: TrainConfig,
+    val_maps: list[str],
+    weights: bytes | None,
+    kind: JobKind,
+) -> tuple[float, float, np.ndarray]:
+    """Mean steps and coverage, and the steps to the end and to 99% per map (2 x maps, in order)."""
+    jobs = [EpisodeJob(kind, m, cfg.val_robots, i, weights, cfg, i) for i, m in enumerate(val_maps)]
+    res = runner.results(placed(jobs), math.inf)  # a validation always ends: the budget leaves room
+    per_map = np.array([[r["steps"] for r in res], [r["steps_99"] for r in res]], dtype=np.float64)
+    return float(per_map[0].mean()), float(np.mean([r["coverage"] for r in res])), per_map
+
+
+def _out_of_budget(run: RunFolder, name: str, st: TrainState, need: int, episodes: int | None, val_s: float) -> bool:
+    """Whether the run stops before stage ``name``: its time or episodes spent, or too little time left for
+    a validation (as long as the last one took); says why."""
+    now = time.perf_counter()
+    if now > run.deadline or (need > 0 and episodes is not None and st.episodes >= episodes):
+        run.say(f"budget spent before stage {name}; stopping")
+        return True
+    if st.stage > 0 and now + VALIDATION_MARGIN * val_s > run.deadline:
+        run.say(f"{run.deadline - now:.0f} s left, under a validation's {val_s:.0f} s; stopping before {name}")
+        return True
+    return False
+
+
+def _validated(
+    row: dict[str, Any],
+    stage: Any,
+    ctx: StageContext,
+    validate: Callable[..., tuple[float, float, np.ndarray]],
+) -> tuple[str, str]:
+    """Validate the stage's weights into ``row``; the keys that choose the stage kept (a score, and the
+    coverage it must not lose)."""
+    cfg, st = ctx.cfg, ctx.state
+    weights = stage.validation_weights(ctx)
+    row["val_steps_mean"], row["val_coverage_mean"], per_map = validate(weights)
+    chosen_by = "val_steps_mean"
+    if cfg.score == "relative":  # against the yardstick stage (the heuristic for hier), map by map
+        if stage.yardstick:
+            st.val_ref = per_map.tolist()
+        ref = np.asarray(st.val_ref)
+        row["val_score"] = float(relative_score(per_map[0], per_map[1], ref[0], ref[1]))
+        chosen_by = "val_score"
+    cov_key = "val_coverage_mean"
+    if cfg.strategy == "ncm":  # NCM's own evaluation samples: validate that too (seeded per map)
+        steps_s, cov_s, _ = validate(weights, JobKind.EVAL_SAMPLED)
+        row["val_sampled_steps_mean"], row["val_sampled_coverage_mean"] = steps_s, cov_s
+        if cfg.ncm.select == "sampled":
+            chosen_by, cov_key = "val_sampled_steps_mean", "val_sampled_coverage_mean"
+    return chosen_by, cov_key
+
+
+def _keep_if_best(
+    run: RunFolder,
+    row: dict[str, Any],
+    stage: Any,
+    ctx: StageContext,
+    chosen_by: str,
+    cov_key: str,
+    predictor_info: dict[str, str] | None,
+) -> None:
+    """Write ``best.npz`` where the stage is the yardstick or beats the best so far (fewest validation steps,
+    or the best score) at no less coverage than the yardstick."""
+    st = ctx.state
+    if not (stage.yardstick or (row[chosen_by] < st.best_val and row[cov_key] >= st.stage_rows[0][cov_key] - 0.005)):
+        return
+    st.best_val, st.best_stage = row[chosen_by], stage.name
+    meta = {k: row[k] for k in row if k.startswith("val_")}
+    save_policy(
+        run.out / "best.npz",
+        policy_net(ctx.net),
+        {
+            "stage": stage.name,
+            **meta,
+            "chosen_by": chosen_by,
+            "train_config": config_to_dict(ctx.cfg),
+            **({"predictor": predictor_info} if predictor_info else {}),
+        },
+    )
+
+
+def _log_stage(row: dict[str, Any], st: TrainState, log: _Log, t0: float, elapsed_s: float) -> None:
+    """The stage's row in ``log.csv`` and in the state's stage rows (``stages.csv``)."""
+    took = time.perf_counter() - t0
+    row["time_s"] = round(elapsed_s, 1)
+    row["episodes"] = st.episodes
+    if row.get("decisions"):
+        row["decisions_per_s"] = round(row["decisions"] / took, 2)
+    st.stage_rows.append(
+        {k: row.get(k) for k in _STAGE_COLUMNS if k in row or not k.startswith(("val_sampled", "val_score"))}
+    )
+    log.row(row, st.stage)
+
+
+def _finish(run: RunFolder, cfg: TrainConfig, st: TrainState) -> TrainResult:
+    """The kept stage's weights as ``policy.npz``, the learning curve and ``stages.csv``."""
+    policy = run.keep_best("policy.npz", "no stage finished within the budget; give more --minutes")
+    plot_learning_curve(run.out / "log.csv", run.out / "curve.png", cfg.strategy, st.best_stage)
     rows = [r | {"kept": int(r["stage"] == st.best_stage)} for r in st.stage_rows]
-    with open(out / "stages.csv", "w", newline="") as f:
+    with open(run.out / "stages.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
-    return TrainResult(out / "policy.npz", st.best_stage, st.stage_rows)
+    return TrainResult(policy, st.best_stage, st.stage_rows)
 
 
 def _checkpoint(
-    path: Path,
+    run: RunFolder,
     cfg: TrainConfig,
     env: dict[str, Any],
     net: torch.nn.Module,
@@ -358,29 +411,31 @@ def _checkpoint(
         "state": st.__dict__, "data": _labels_to_blob(data), "rng": rng.bit_generator.state,
         "code_version": code_version(),
     }  # fmt: skip
-    tmp = path.with_name("state.pt.tmp")
-    torch.save(blob, tmp)
-    tmp.replace(path)
+    run.save_state(blob)
 
 
 def _restore(
-    path: Path,
+    run: RunFolder,
     cfg: TrainConfig,
     env: dict[str, Any],
     net: torch.nn.Module,
     opt: torch.optim.Optimizer,
     rng: np.random.Generator,
+    n_stages: int,
 ) -> tuple[TrainState, list[ExpertLabel]]:
-    """Loads the run saved at ``path`` into ``net``, ``opt`` and ``rng``; its state and expert labels."""
-    blob = torch.load(path, weights_only=True)
+    """Loads the run saved in ``run`` into ``net``, ``opt`` and ``rng``; its state and expert labels."""
+    blob = run.load_state()
     if blob["config"] != config_to_dict(cfg) or blob.get("env", env) != env:
         raise MrExploreError(
-            f"{path.parent} was trained with another config; resume with the same --config, or a new --out"
+            f"{run.out} was trained with another config; resume with the same --config, or a new --out"
         )
     net.load_state_dict(blob["net"])
     opt.load_state_dict(blob["opt"])
     rng.bit_generator.state = blob["rng"]
-    return TrainState(**blob["state"]), _labels_from_blob(blob["data"])
+    st = TrainState(**blob["state"])
+    done = f"{st.episodes} episodes, {st.elapsed_s / 60:.1f} min so far"
+    run.say(f"resuming {run.out} at stage {st.stage} of {n_stages} ({done})")
+    return st, _labels_from_blob(blob["data"])
 
 
 def _validation_text(row: dict[str, Any]) -> str:
@@ -408,7 +463,7 @@ def validate_policy(
         weights = weights_of(both)
     elif policy is not None:
         weights = weights_of(load_policy(policy).net)
-    val_maps = maps if maps is not None else split_maps(train_dir, cfg.val_maps, cfg.plans)[1]
+    val_maps = maps if maps is not None else split_maps(train_dir, cfg.val_maps, cfg.episodes.plans)[1]
     with _Runner(workers, None) as runner:
         jobs = [EpisodeJob(JobKind.EVAL, m, cfg.val_robots, i, weights, cfg, i) for i, m in enumerate(val_maps)]
         res = runner.results(jobs, math.inf)

@@ -13,7 +13,7 @@ import pytest
 import torch
 from random_problems import random_problem as _random_problem
 
-from mrexplore.cli import TORCH_MISSING
+from mrexplore.cli.common import TORCH_MISSING
 from mrexplore.config import LearnedConfig
 from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS, load_ncm_policy, load_policy
 from mrexplore.global_planning.learned.features import graph_inputs

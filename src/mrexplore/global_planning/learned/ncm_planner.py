@@ -13,7 +13,7 @@ from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.learned.ncm_inputs import NcmInputs, ncm_inputs
 from mrexplore.global_planning.learned.numpy_nets import NcmNetNp
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
-from mrexplore.threads import thread_count
+from mrexplore.runtime.threads import thread_count
 
 if TYPE_CHECKING:
     from mrexplore.global_planning.learned.ncm_network import NcmCritic, NcmNet

@@ -21,11 +21,11 @@ from numpy.typing import NDArray
 from mrexplore.config import LearnedConfig, config_from_dict
 from mrexplore.global_planning.learned.ncm_inputs import NcmConfig
 from mrexplore.global_planning.learned.numpy_nets import GraphNetNp, NcmNetNp
+from mrexplore.runtime.weights_archive import HEADER_MEMBER as _HEADER
+from mrexplore.runtime.weights_archive import WEIGHT_PREFIX as _WEIGHT
+from mrexplore.runtime.weights_archive import code_version, file_sha256, weights_digest
+from mrexplore.runtime.weights_archive import write_weights_archive as write_policy_file
 from mrexplore.types import MrExploreError
-from mrexplore.weights_archive import HEADER_MEMBER as _HEADER
-from mrexplore.weights_archive import WEIGHT_PREFIX as _WEIGHT
-from mrexplore.weights_archive import code_version, file_sha256, weights_digest
-from mrexplore.weights_archive import write_weights_archive as write_policy_file
 
 __all__ = [
     "LoadedPolicy",

@@ -3,8 +3,9 @@ benchmarks read, the ``MREXPLORE_MAPS`` environment variable, or ``--maps-dir`` 
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
+
+from mrexplore.config.run import runtime_value
 
 __all__ = ["MAPS_ENV", "DEFAULT_MAPS_DIR", "DEFAULT_MAP", "maps_dir"]
 
@@ -12,13 +13,14 @@ DEFAULT_MAP = "generated:0"
 """The map a mission explores when none is given: a procedural floor plan."""
 
 MAPS_ENV = "MREXPLORE_MAPS"
-"""The environment variable naming the example maps' folder."""
+"""The environment variable of the ``runtime.maps_dir`` setting, naming the example maps' folder."""
 DEFAULT_MAPS_DIR = Path("..") / "shared" / "maps"
 """Where the example maps are when nothing says otherwise: beside a clone of the repository."""
 
 
 def maps_dir() -> Path:
-    """The example maps' folder: ``$MREXPLORE_MAPS``, else ``../shared/maps`` (from the working directory).
+    """The example maps' folder: the ``runtime.maps_dir`` setting (``$MREXPLORE_MAPS``), else
+    ``../shared/maps`` (from the working directory).
 
     Examples
     --------
@@ -30,5 +32,5 @@ def maps_dir() -> Path:
     >>> maps_dir() == DEFAULT_MAPS_DIR
     True
     """
-    given = os.environ.get(MAPS_ENV)
+    given: str | None = runtime_value("maps_dir")
     return Path(given) if given else DEFAULT_MAPS_DIR

@@ -15,7 +15,7 @@ from PIL import Image, ImageDraw, ImageFont
 from mrexplore.pipeline import Decision
 from mrexplore.preprocessing.clustering import Clusters
 from mrexplore.preprocessing.transmission import LinkStatus
-from mrexplore.progress import Progress
+from mrexplore.runtime.progress import Progress
 from mrexplore.sim.belief import merge_beliefs
 from mrexplore.sim.world import ExplorationSim
 from mrexplore.types import CellState, MrExploreError, StateGrid

@@ -17,7 +17,7 @@ _SENTINEL = "lidar.*.nbi"
 def kernels_cached() -> bool:
     """True where numba's cache holds the simulator's kernels: in the package's own folder, or, where that
     is not writable, in numba's user-wide cache (``$NUMBA_CACHE_DIR``, else ``~/.cache/numba``)."""
-    pkg = Path(__file__).parent
+    pkg = Path(__file__).parents[1]  # the package: runtime/ is one of its folders
     if any((pkg / "sim" / "__pycache__").glob(_SENTINEL)):
         return True
     user = Path(os.environ.get("NUMBA_CACHE_DIR") or Path.home() / ".cache" / "numba")

@@ -33,19 +33,19 @@ from numpy.typing import NDArray
 from mrexplore.config import FaultConfig, MissionConfig, SimConfig
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 from mrexplore.maps.ground_truth import GroundTruthMap
-from mrexplore.memory import peak_mb, reset_peak
 from mrexplore.paths.astar import astar_path
 from mrexplore.paths.distance_field import descend_path, distance_fields, distances_at
 from mrexplore.pipeline import NO_GOAL, NO_ROUTE, Decision, DecisionInput, ExplorationPipeline, PosedDecision
 from mrexplore.preprocessing.frontiers import close_unknown_holes, detect_frontiers
 from mrexplore.preprocessing.link import TeamLink
 from mrexplore.preprocessing.transmission import LinkStatus
-from mrexplore.progress import Progress
+from mrexplore.runtime.memory import peak_mb, reset_peak
+from mrexplore.runtime.progress import Progress
+from mrexplore.runtime.timing import timed
 from mrexplore.sim.belief import classify
 from mrexplore.sim.measures import EpisodeMeasures, lower_bound_steps
 from mrexplore.sim.starts import draw_starts
 from mrexplore.sim.world import ExplorationSim, StepResult
-from mrexplore.timing import timed
 from mrexplore.types import CellState, MrExploreError
 
 __all__ = [
@@ -85,7 +85,7 @@ class MissionResult:
 @dataclass(frozen=True)
 class MissionSpec:
     """What one mission is made of: the map, the strategy, the settings, the seed and, where given, the
-    starts. :class:`Mission`, :func:`run_mission` and :class:`~mrexplore.decision_env.DecisionEnv` are
+    starts. :class:`Mission`, :func:`run_mission` and :class:`~mrexplore.mission.decision_env.DecisionEnv` are
     built from it."""
 
     truth: GroundTruthMap

@@ -14,11 +14,12 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import TypeVar
 
-from mrexplore.types import MrExploreError
+from mrexplore.config.run import runtime_value
 
 __all__ = ["THREADS_ENV", "thread_count", "map_threads", "start_thread"]
 
 THREADS_ENV = "MREXPLORE_THREADS"
+"""The environment variable of the ``runtime.threads`` setting, which worker processes are started with."""
 _T = TypeVar("_T")
 _R = TypeVar("_R")
 _pool: ThreadPoolExecutor | None = None
@@ -26,17 +27,9 @@ _PREFIX = "mrexplore-pool"
 
 
 def thread_count() -> int:
-    """Threads to use: ``$MREXPLORE_THREADS`` when set (>= 1), else one per core."""
-    text = os.environ.get(THREADS_ENV, "")
-    if not text:
-        return os.cpu_count() or 1
-    try:
-        n = int(text)
-    except ValueError:
-        n = 0
-    if n < 1:
-        raise MrExploreError(f"{THREADS_ENV} must be an integer >= 1, got {text!r}; unset it to use every core")
-    return n
+    """Threads to use: the ``runtime.threads`` setting (``$MREXPLORE_THREADS``) when set, else one per core."""
+    n: int | None = runtime_value("threads")
+    return n if n is not None else os.cpu_count() or 1
 
 
 def map_threads(fn: Callable[[_T], _R], items: Sequence[_T]) -> list[_R]:
