@@ -2,8 +2,9 @@
 and ``ncm`` at one seed, row for row, and their planning time side by side.
 
 Run: python benchmarks/inference_parity.py --out docs/results/inference_parity [--workers 2]
-It runs ``mrexplore bench`` twice on the same episodes, with ``MREXPLORE_INFERENCE=numpy`` (the default)
-and ``=torch`` (needs torch), in two folders under ``--out`` (each resumable), then writes ``report.md``:
+It runs the bench twice on the same episodes, deciding on the NumPy networks (what the strategies run) and on
+the torch ones (training's twins, which answer the same scoring protocol), in two folders under ``--out`` (each
+resumable), then writes ``report.md``:
 per strategy, the episodes whose results differ in any column but timings, each with its steps, and the
 planning time of both runs summed.
 """
@@ -11,8 +12,6 @@ planning time of both runs summed.
 from __future__ import annotations
 
 import argparse
-import os
-import subprocess
 import sys
 from pathlib import Path
 
@@ -20,21 +19,24 @@ from _common import run_script
 
 from mrexplore.bench.compare import _NOT_RESULTS
 from mrexplore.bench.runner import read_rows
-from mrexplore.pipeline.strategies import INFERENCE_ENV
 from mrexplore.runtime.example_maps import maps_dir
-from mrexplore.types import MrExploreError
 
 BACKENDS = ("numpy", "torch")
 
 
 def bench(backend: str, out: Path, maps: list[str], strategies: str, workers: int) -> None:
-    cmd = [sys.executable, "-m", "mrexplore", "bench", "--maps", *maps, "--strategies", strategies]
-    cmd += ["--robots", "3", "--seeds", "1", "--resolution", "0.1", "--max-steps", "2000"]
-    cmd += ["--workers", str(workers), "--out", str(out / backend)]
-    print(f"{backend}: {' '.join(cmd[2:])}", flush=True)
-    done = subprocess.run(cmd, env={**os.environ, INFERENCE_ENV: backend}, check=False)
-    if done.returncode != 0:
-        raise MrExploreError(f"the {backend} bench failed (exit {done.returncode}); see its message above")
+    from dataclasses import replace
+
+    from mrexplore.bench.runner import EpisodeSpec, expand_maps, run_bench, run_episode
+    from mrexplore.config import MapConfig, MissionConfig, RunConfig
+    from mrexplore.training.twins import episode_deciding_with_torch
+
+    run = RunConfig(map=MapConfig(resolution_m=0.1), mission=replace(MissionConfig(), max_steps=2000))
+    names = [s for s in strategies.split(",") if s]
+    specs = [EpisodeSpec(m, s, 3, 0, run) for m in expand_maps(maps) for s in names]
+    print(f"{backend}: {len(specs)} episodes, 3 robots, seed 0, 0.1 m -> {out / backend}", flush=True)
+    episode = episode_deciding_with_torch if backend == "torch" else run_episode
+    run_bench(specs, out / backend / "results.csv", workers, None, None, episode)
 
 
 def compare(out: Path, strategies: list[str]) -> str:

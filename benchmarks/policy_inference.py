@@ -31,7 +31,7 @@ from mrexplore.preprocessing.clustering import Clusters
 def planner_of(strategy: str, backend: str) -> LearnedPlanner | NcmPlanner:
     """The shipped policy of ``strategy`` (hier, or ncm) on the NumPy network or the torch one."""
     if backend == "torch":
-        from mrexplore.global_planning.learned.checkpoint import load_ncm_policy, load_policy
+        from mrexplore.training.checkpoint import load_ncm_policy, load_policy
 
         return LearnedPlanner(load_policy().net) if strategy == "hier" else NcmPlanner(load_ncm_policy().net)
     return LearnedPlanner(load_policy_np().net) if strategy == "hier" else NcmPlanner(load_ncm_policy_np().net)

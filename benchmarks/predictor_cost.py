@@ -46,7 +46,7 @@ def main() -> int:
     ap.add_argument("--robots", type=int, default=8)
     ap.add_argument("--resolution", type=float, default=0.05, help="cell size, metres (default 0.05)")
     ap.add_argument("--coverage", type=float, default=0.5, help="take the belief past this coverage (0-1)")
-    ap.add_argument("--predictor", default=None, help="a file written by 'mrexplore train --predictor'")
+    ap.add_argument("--predictor", default=None, help="a file written by 'mrexplore train --target predictor'")
     ap.add_argument("--repeats", type=int, default=20)
     a = ap.parse_args()
     if not 0.0 <= a.coverage < 1.0:

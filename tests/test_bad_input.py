@@ -17,9 +17,9 @@ from policy_edit import edited_policy
 
 from mrexplore.cli import main, strict_json
 from mrexplore.config import LearnedConfig, MapConfig, RunConfig, config_from_dict
-from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS, load_policy, save_policy
-from mrexplore.global_planning.learned.network import MultiGraphNet
 from mrexplore.maps.loaders import load_map
+from mrexplore.training.checkpoint import VALUE_INPUTS, load_policy, save_policy
+from mrexplore.training.hier_net import MultiGraphNet
 from mrexplore.types import MrExploreError
 
 FAST = ["--resolution", "0.2", "--robots", "2", "--max-steps", "30"]

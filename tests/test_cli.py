@@ -236,8 +236,8 @@ def test_ncm_explores_and_benches_with_a_given_policy(tmp_path, capsys) -> None:
 
     import torch
 
-    from mrexplore.global_planning.learned.checkpoint import default_policy_path, save_policy
-    from mrexplore.global_planning.learned.ncm_network import NcmNet
+    from mrexplore.training.checkpoint import default_policy_path, save_policy
+    from mrexplore.training.ncm_net import NcmNet
 
     torch.manual_seed(0)
     ncm = tmp_path / "ncm.npz"
@@ -285,7 +285,7 @@ import sys
 from mrexplore.cli import main
 codes = [main(a) for a in (["--help"], ["explore", "--strategy", "heir"], ["explore", "--robots", "0"],
                            ["bench", "--maps", "x", "--strategies", "hier,nope", "--out", "o"])]
-print(codes, sorted(m for m in ("numba", "scipy", "torch", "sklearn", "mrexplore.mission") if m in sys.modules))
+print(codes, sorted(m for m in ("numba", "scipy", "torch", "sklearn", "mrexplore.mission.loop") if m in sys.modules))
 """
 
 
@@ -312,7 +312,7 @@ def test_a_first_run_says_it_compiles(monkeypatch, tmp_path, capsys) -> None:
 
 
 def test_the_predictive_strategy_runs_with_a_trained_predictor_or_none(tmp_path, capsys) -> None:
-    """``train --predictor`` writes a predictor that explore runs and names (path, sha256) in ``--json``;
+    """``train --target predictor`` writes a predictor that explore runs and names (path, sha256) in ``--json``;
     ``--predictor none`` runs without one; bad predictor input is one line."""
     cfg = tmp_path / "tiny.yaml"
     cfg.write_text(
@@ -320,7 +320,18 @@ def test_the_predictive_strategy_runs_with_a_trained_predictor_or_none(tmp_path,
         "  width: 2\n  crop_cells: 16\n  batch: 2\n  epochs: 1\n  steps_per_epoch: 1\n"
     )
     out = tmp_path / "pred"
-    args = ["train", "--predictor", "--out", str(out), "--config", str(cfg), "--workers", "1", "--no-progress"]
+    args = [
+        "train",
+        "--target",
+        "predictor",
+        "--out",
+        str(out),
+        "--config",
+        str(cfg),
+        "--workers",
+        "1",
+        "--no-progress",
+    ]
     assert main([*args, "--train-maps", str(tmp_path / "no-maps")]) == 0
     line = capsys.readouterr().out.strip()
     assert line.startswith("kept epoch 1 (validation loss ") and line.endswith(f"{out / 'log.csv'}")
@@ -334,7 +345,7 @@ def test_the_predictive_strategy_runs_with_a_trained_predictor_or_none(tmp_path,
     assert main([*run, "--predictor", str(tmp_path / "missing.npz")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("mrexplore: error: predictor file") and "not found" in err and err.count("\n") == 1
-    assert main(["train", "--predictor", "--strategy", "ncm", "--out", str(tmp_path / "o")]) == 2
+    assert main(["train", "--target", "predictor", "--strategy", "ncm", "--out", str(tmp_path / "o")]) == 2
     assert capsys.readouterr().err == (
-        "mrexplore: error: --strategy does not apply to --predictor (it trains on collected beliefs); drop it\n"
+        "mrexplore: error: --strategy does not apply to --target predictor (it trains on collected beliefs); drop it\n"
     )

@@ -13,9 +13,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mrexplore.config import MapConfig
-from mrexplore.global_planning.learned.checkpoint import default_policy_path, load_policy
 from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.maps.loaders import load_map
+from mrexplore.training.checkpoint import default_policy_path, load_policy
 from mrexplore.types import MrExploreError
 
 FUZZ_CFG = MapConfig(resolution_m=0.1, max_image_pixels=4_000_000, max_cells=1_000_000)

@@ -129,9 +129,9 @@ def test_a_policy_that_reads_the_predicted_shortcut_gets_the_loops_six_metres() 
     """The loop above, seen by a policy trained with ``use_predicted_path``: robot (1, 1)'s shortcut to the
     cluster at (1, 4) is 6 m, over the 10 m distance scale, and none to (1, 2)."""
     from mrexplore.config import LearnedConfig
-    from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS
-    from mrexplore.global_planning.learned.network import MultiGraphNet
     from mrexplore.global_planning.learned.policy import LearnedPlanner
+    from mrexplore.training.checkpoint import VALUE_INPUTS
+    from mrexplore.training.hier_net import MultiGraphNet
 
     state = state_grid(LOOP)
     clusters = Clusters(np.array([[1, 2], [1, 4]], np.int32), np.array([1, 1], np.int32), np.zeros((2, 2), np.int32),

@@ -169,7 +169,8 @@ def test_bad_predictor_files_get_one_line_each(tmp_path: Path) -> None:
     with pytest.raises(MrExploreError) as e:
         load_predictor(missing)
     assert str(e.value) == (
-        f"predictor file {missing} not found; pass a file written by 'mrexplore train --predictor' with --predictor"
+        f"predictor file {missing} not found; pass a file written by 'mrexplore train --target predictor' "
+        "with --predictor"
     )
     junk = tmp_path / "junk.npz"
     junk.write_bytes(b"not a zip")

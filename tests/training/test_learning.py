@@ -10,10 +10,11 @@ import torch
 
 from mrexplore.config import LearnedConfig, TrainConfig
 from mrexplore.global_planning.learned.features import CLUSTER_FEATURES, EDGE_FEATURES, ROBOT_FEATURES, GraphInputs
-from mrexplore.global_planning.learned.network import MultiGraphNet, collate
-from mrexplore.global_planning.learned.policy import hungarian_decode, sample_sequential, sequential_log_prob
+from mrexplore.global_planning.learned.policy import hungarian_decode, sample_sequential
 from mrexplore.training.expert import ExpertLabel
+from mrexplore.training.hier_net import MultiGraphNet, collate
 from mrexplore.training.ppo import ppo_loss
+from mrexplore.training.sequential import sequential_log_prob
 from mrexplore.training.updates import fit_imitation
 
 R, C = 2, 3

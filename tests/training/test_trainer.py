@@ -11,7 +11,7 @@ import pytest
 import torch
 
 from mrexplore.config import EpisodesConfig, NcmTrainConfig, TrainConfig
-from mrexplore.global_planning.learned.checkpoint import load_policy
+from mrexplore.training.checkpoint import load_policy
 from mrexplore.training.trainer import LOG_COLUMNS, split_maps, train
 from mrexplore.types import MrExploreError
 
@@ -211,7 +211,7 @@ NCM_TINY = TrainConfig(
 
 
 def test_ncm_trains_with_the_same_stages_logs_and_resume(tmp_path: Path) -> None:
-    from mrexplore.global_planning.learned.checkpoint import load_ncm_policy
+    from mrexplore.training.checkpoint import load_ncm_policy
 
     out = tmp_path / "ncm"
     first = train(NCM_TINY, out, None, episodes=1, workers=1, seed=5)
@@ -247,9 +247,9 @@ def test_ncm_trains_through_ray_as_through_processes(tmp_path: Path) -> None:
 def test_ncm_rewards_sum_to_its_area_formula() -> None:
     """NCM's reward per decision of k steps is 5e-3 * (new m^2 - 4 k / 25); over an episode the rewards
     sum to the same formula over the whole span from the first decision to the end."""
-    import numpy as np
 
-    from mrexplore.training.episodes import EpisodeJob, JobKind, NcmActorCritic, _run_ncm, weights_of
+    from mrexplore.training.episodes import EpisodeJob, JobKind, _run_ncm, weights_of
+    from mrexplore.training.ncm_net import NcmActorCritic
 
     torch.manual_seed(0)
     net = NcmActorCritic()
@@ -259,14 +259,13 @@ def test_ncm_rewards_sum_to_its_area_formula() -> None:
     assert len(rec) == len(rewards) == len(out["discounts"]) == out["decisions"] > 1
     assert all(0 < d <= 1 for d in out["discounts"][:-1])
     # the same episode again, counting area and steps from the first decision on
-    from mrexplore.global_planning.learned.ncm_network import NcmPlanner
+    from mrexplore.global_planning.learned.ncm_planner import NcmPlanner
     from mrexplore.training.episodes import episode_mission, ncm_pipeline
 
-    planner = NcmPlanner(net.actor, sample=True, critic=net.critic, record=[])
+    planner = NcmPlanner(net.actor, sample=True)
     m = episode_mission(job, ncm_pipeline(planner))
     first: tuple[int, int] | None = None
     while m.advance():
-        planner.value_extra = np.zeros(4, np.float32)
         if m.pose() is None:
             continue
         first = first or (m.sim.known_cells, m.steps)

@@ -16,7 +16,7 @@ import functools
 import hashlib
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -29,7 +29,7 @@ from mrexplore.config import RunConfig, TrainConfig, config_to_dict
 from mrexplore.config.safe_yaml import load_yaml_file
 from mrexplore.maps.loaders import is_generator_spec, load_map_shared
 from mrexplore.mission import MissionSpec, run_mission
-from mrexplore.pipeline import make_strategy, policy_for, strategy_spec
+from mrexplore.pipeline import make_strategy, policy_for, strategy_for_run, strategy_spec
 from mrexplore.runtime.csv_append import append_row, drop_partial_tail
 from mrexplore.runtime.progress import Progress
 from mrexplore.runtime.threads import THREADS_ENV
@@ -105,7 +105,7 @@ class EpisodeSpec:
             return _predictor_sha(self.predictor) if spec.predictive else ""
         policy = policy_for(self.strategy, self.policy)
         sha = _policy_sha(kind, policy)
-        if spec.predictive or (kind == "hier" and _reads_prediction(policy)):  # the predictor is part of it
+        if spec.predictive or _reads_prediction(kind, policy):  # the predictor is part of it
             sha += "+" + _predictor_sha(self.predictor)
         return sha
 
@@ -116,22 +116,20 @@ class EpisodeSpec:
 
 @functools.lru_cache(maxsize=16)
 def _policy_sha(kind: str, policy: str | None) -> str:
-    from mrexplore.global_planning.learned.policy_file import default_ncm_policy_path, default_policy_path, file_sha256
+    from mrexplore.global_planning.learned.methods import learned_method
+    from mrexplore.global_planning.learned.policy_file import file_sha256
 
-    path = Path(policy) if policy else (default_ncm_policy_path() if kind == "ncm" else default_policy_path())
+    path = Path(policy) if policy else learned_method(kind).default_weights()
     return file_sha256(path) if path.is_file() else ""
 
 
 @functools.lru_cache(maxsize=16)
-def _reads_prediction(policy: str | None) -> bool:
-    """Whether a ``hier`` policy file reads the predicted gain (False where it cannot be read: the bench's
+def _reads_prediction(kind: str, policy: str | None) -> bool:
+    """Whether a learned method's policy file reads a prediction (False where it cannot be read: the bench's
     start refuses it then)."""
-    from mrexplore.global_planning.learned.policy_file import HIER_FORMAT, hier_config, read_policy_file
+    from mrexplore.global_planning.learned.methods import learned_method
 
-    try:
-        return hier_config(read_policy_file(Path(policy) if policy else None, HIER_FORMAT))[0].reads_prediction
-    except (MrExploreError, KeyError, TypeError, ValueError):
-        return False
+    return learned_method(kind).file_reads_prediction(Path(policy) if policy else None)
 
 
 @functools.lru_cache(maxsize=16)
@@ -209,15 +207,7 @@ def run_episode(spec: EpisodeSpec) -> dict[str, Any]:
     """Run one episode and return its CSV row."""
     run = spec.run
     truth = load_map_shared(spec.map_path, run.map)
-    strategy = make_strategy(
-        spec.strategy,
-        run.global_planning,
-        run.preprocess,
-        run.local_planning,
-        policy=spec.policy,
-        coscan_cfg=run.coscan,
-        predictor=spec.predictor,
-    )
+    strategy = strategy_for_run(spec.strategy, run, policy=spec.policy, predictor=spec.predictor)
     result = run_mission(
         MissionSpec(truth, strategy, replace(run.sim, robots=spec.robots), run.mission, seed=spec.seed), progress=False
     )
@@ -319,10 +309,12 @@ def run_bench(
     workers: int = 0,
     progress: bool | None = None,
     ray_address: str | None = None,
+    episode: Callable[[EpisodeSpec], dict[str, Any]] | None = None,
 ) -> int:
     """Run the episodes not yet in ``results_csv``, ``workers`` at a time (0: one per core), in local
     worker processes, or as Ray tasks when ``ray_address`` is given (``local`` starts a Ray instance on
-    this machine; ``auto`` or ``HOST:PORT`` joins a running cluster).
+    this machine; ``auto`` or ``HOST:PORT`` joins a running cluster). ``episode`` runs one (default
+    :func:`run_episode`; a module-level function, so that workers can import it).
 
     Returns the number of episodes run now. Each finished episode is appended (and synced) at once.
     """
@@ -345,7 +337,7 @@ def run_bench(
     # Episodes already fill the cores: each local worker's kernels run on as many threads as are left over;
     # a Ray task has one CPU, so its kernels run on one thread.
     threads = max(1, (os.cpu_count() or 1) // workers)
-    runner = JobRunner(run_episode, workers, ray_address, _set_threads, (threads,), {THREADS_ENV: "1"})
+    runner = JobRunner(episode or run_episode, workers, ray_address, _set_threads, (threads,), {THREADS_ENV: "1"})
     with runner:
         for row in runner.run(todo):
             append_row(results_csv, COLUMNS, row)

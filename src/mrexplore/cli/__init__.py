@@ -2,6 +2,6 @@
 (:mod:`~mrexplore.cli.settings_flags`); bad input is one line and exit 2."""
 
 from mrexplore.cli.main import build_parser, main
-from mrexplore.cli.records import strict_json
+from mrexplore.mission.record import strict_json
 
 __all__ = ["main", "build_parser", "strict_json"]

@@ -43,7 +43,7 @@ POLICY_HELP = (
 )
 PREDICTOR_HELP = (
     "map predictor of the predictive strategies (hier-predict-heuristic, hier-predict): FILE written by "
-    "'mrexplore train --predictor', or none (every unknown cell free); default: the shipped one"
+    "'mrexplore train --target predictor', or none (every unknown cell free); default: the shipped one"
 )
 TORCH_MISSING = (
     "training needs torch, which is not installed: pip install 'mrexplore[train]' (on a machine without an "

@@ -16,9 +16,9 @@ from mrexplore.cli.common import (
     check_output,
     xy,
 )
-from mrexplore.cli.records import mission_record
 from mrexplore.cli.settings_flags import MISSION_ALIASES, add_settings_flags, run_config
 from mrexplore.config import FaultConfig, RunConfig
+from mrexplore.mission.record import mission_record
 from mrexplore.pipeline.registry import strategy_names, strategy_spec
 from mrexplore.runtime.example_maps import DEFAULT_MAP
 from mrexplore.runtime.kernel_cache import say_if_compiling
@@ -87,17 +87,10 @@ def add_explore(sub: Any) -> None:
 
 def make_run_strategy(args: argparse.Namespace, run: RunConfig) -> Any:
     """The strategy the flags name (``--strategy``, ``--no-local``, ``--policy``) with the run's settings."""
-    from mrexplore.pipeline import make_strategy
+    from mrexplore.pipeline.registry import strategy_for_run
 
-    return make_strategy(
-        args.strategy,
-        run.global_planning,
-        run.preprocess,
-        run.local_planning,
-        local=not args.no_local,
-        policy=args.policy,
-        coscan_cfg=run.coscan,
-        predictor=getattr(args, "predictor", None),
+    return strategy_for_run(
+        args.strategy, run, local=not args.no_local, policy=args.policy, predictor=getattr(args, "predictor", None)
     )
 
 
@@ -118,7 +111,7 @@ def mission_setup(args: argparse.Namespace) -> tuple[RunConfig, Any, Any, NDArra
 
 
 def run_explore(args: argparse.Namespace) -> dict[str, Any]:
-    """``explore``: the mission's record (:func:`~mrexplore.cli.records.mission_record`)."""
+    """``explore``: the mission's record (:func:`~mrexplore.mission.record.mission_record`)."""
     check_output(args.gif, "--gif")
     check_output(args.png, "--png")
     check_output(args.save_map, "--save-map")

@@ -18,11 +18,11 @@ from typing import Any
 from mrexplore.cli.bench import add_bench, run_bench_command
 from mrexplore.cli.common import EXIT_BAD_INPUT, EXIT_INTERRUPTED, Parser
 from mrexplore.cli.explore import add_explore, run_explore
-from mrexplore.cli.records import strict_json, summary
 from mrexplore.cli.report import add_report, run_report
 from mrexplore.cli.ros2 import add_ros2, run_ros2
 from mrexplore.cli.train import add_train, run_train
 from mrexplore.config import CONFIG_HEADER, RunConfig, config_yaml
+from mrexplore.mission.record import strict_json, summary
 from mrexplore.runtime.example_maps import MAPS_ENV
 from mrexplore.types import MrExploreError
 

@@ -21,9 +21,9 @@ from mrexplore.cli.common import (
     floats,
 )
 from mrexplore.cli.explore import add_mission_flags, make_run_strategy, mission_setup
-from mrexplore.cli.records import launch_summary, mission_record, strict_json
 from mrexplore.cli.settings_flags import add_settings_flags, run_config
 from mrexplore.config import MapConfig, RunConfig
+from mrexplore.mission.record import launch_summary, mission_record, strict_json
 from mrexplore.pipeline.registry import strategy_names
 from mrexplore.types import MrExploreError
 

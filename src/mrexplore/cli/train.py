@@ -22,8 +22,8 @@ TRAIN_METHOD = (
     "train the learned global layer: hier by a cross-entropy search over its edge weights, then imitation of "
     "a lookahead expert (DAgger), PPO optional; ncm (NeuralCoMapping) by PPO"
 )
-TRAIN_PREDICTOR = "\0train"
-"""``train --predictor`` given alone: train the map predictor."""
+TARGETS = ("policy", "predictor")
+"""What ``train --target`` trains: a learned global layer's policy, or the map predictor."""
 
 
 def train_maps(given: str | None) -> Path | None:
@@ -36,15 +36,20 @@ def add_train(sub: Any) -> None:
     tr = sub.add_parser("train", help=TRAIN_METHOD)
     tr.add_argument("--out", required=True, help="folder for policy.npz, checkpoints, log.csv and stages.csv")
     tr.add_argument(
+        "--target",
+        choices=TARGETS,
+        default="policy",
+        help="policy (default): the learned global layer of train.strategy (policy.npz, checkpoints, log.csv, "
+        "stages.csv, curve.png); predictor: the map predictor (predictor.npz, beliefs.npz, checkpoints, log.csv, "
+        "curve.png), from beliefs of missions on the training maps, the truth as the label (reads the predictor "
+        "and sim sections)",
+    )
+    tr.add_argument(
         "--predictor",
-        nargs="?",
-        const=TRAIN_PREDICTOR,
         default=None,
         metavar="FILE|none",
-        help="alone: train the map predictor instead (predictor.npz, beliefs.npz, checkpoints, log.csv, "
-        "curve.png) from beliefs of missions on the training maps, the truth as the label (reads the predictor "
-        "and sim sections); with FILE or none: the map predictor of a policy that reads a prediction "
-        "(train.learned.use_predicted_gain or use_predicted_path; default: the shipped one)",
+        help="the map predictor of a policy that reads a prediction (train.learned.use_predicted_gain or "
+        "use_predicted_path): a file 'mrexplore train --target predictor' wrote, or none (default: the shipped one)",
     )
     budget = tr.add_mutually_exclusive_group()
     budget.add_argument("--minutes", type=float, default=None, help="stop starting stages after this many minutes")
@@ -72,13 +77,16 @@ def run_train(args: argparse.Namespace) -> str:
     run = run_config(args)
     if args.minutes is not None and not (math.isfinite(args.minutes) and args.minutes > 0):
         raise MrExploreError(f"--minutes must be > 0, got {args.minutes}")
-    if args.predictor == TRAIN_PREDICTOR:
+    if args.target == "predictor":
         return _train_predictor(args, run)
-    if args.predictor is not None and not (run.train.strategy == "hier" and run.train.learned.reads_prediction):
+    from mrexplore.global_planning.learned.methods import learned_method
+
+    method = learned_method(run.train.strategy)
+    if args.predictor is not None and not method.reads_prediction(run.train.learned):
         raise MrExploreError(
-            f"--predictor {args.predictor} is for a hier policy that reads a prediction; set "
-            "train.learned.use_predicted_gain or use_predicted_path: true in --config, or give --predictor alone "
-            "to train a predictor"
+            f"--predictor {args.predictor} is for a policy that reads a prediction; set "
+            "train.learned.use_predicted_gain or use_predicted_path: true, or give --target predictor to train a "
+            "predictor"
         )
     if args.episodes is not None and args.episodes < 1:
         raise MrExploreError(f"--episodes must be >= 1, got {args.episodes}")
@@ -107,7 +115,7 @@ def run_train(args: argparse.Namespace) -> str:
     sampled = f", sampled {best['val_sampled_steps_mean']:.1f}" if best.get("val_sampled_steps_mean") else ""
     wrote = f"wrote {result.policy_path} and {result.policy_path.parent / 'stages.csv'}"
     if result.best_stage == "baseline":
-        start = "hier-heuristic's cost" if run.train.strategy == "hier" else "an untrained network"
+        start = method.untrained_start
         return (
             f"kept the baseline, no trained stage beat it on validation ({best['val_steps_mean']:.1f} steps"
             f"{sampled}): the policy is the untrained start ({start}); train longer; {wrote}"
@@ -116,9 +124,12 @@ def run_train(args: argparse.Namespace) -> str:
 
 
 def _train_predictor(args: argparse.Namespace, run: RunConfig) -> str:
-    if alias_given(args, "--strategy") or args.episodes is not None:
-        flag = "--strategy" if alias_given(args, "--strategy") else "--episodes"
-        raise MrExploreError(f"{flag} does not apply to --predictor (it trains on collected beliefs); drop it")
+    given = [f for f, on in (("--strategy", alias_given(args, "--strategy")), ("--episodes", args.episodes is not None),
+                             ("--predictor", args.predictor is not None)) if on]  # fmt: skip
+    if given:
+        raise MrExploreError(
+            f"{given[0]} does not apply to --target predictor (it trains on collected beliefs); drop it"
+        )
     check_output(args.out, "--out", folder=True)
     need_torch()
     say_if_compiling()

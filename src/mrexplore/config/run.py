@@ -11,7 +11,7 @@ from typing import Any
 
 from mrexplore.config.mission import MissionConfig
 from mrexplore.config.planning import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig
-from mrexplore.config.schema import Checked, OneOf, at_least, config_from_dict, parse_setting, settings_of
+from mrexplore.config.schema import Checked, at_least, config_from_dict, parse_setting, settings_of
 from mrexplore.config.training import PredictorTrainConfig, TrainConfig
 from mrexplore.config.world import MapConfig, SimConfig
 from mrexplore.types import MrExploreError
@@ -42,18 +42,14 @@ class RuntimeConfig(Checked):
     """Threads of the shared pool that runs the work releasing the GIL (beam casting, distance fields, the map
     predictor beside a decision); None: one per core. The benchmark's and training's worker processes run one
     thread each."""
-    inference: str | None = None
-    """How the learned strategies' networks run: ``numpy`` (None's default; no torch) or ``torch`` (the modules
-    they were trained as, to compare the two: ``benchmarks/inference_parity.py``)."""
     maps_dir: str | None = None
     """Folder of the example maps (the dev maps; the training maps in its ``train/``); None: ``../shared/maps``
     from the working directory."""
 
     _constraints = {
         "threads": at_least(1, none="one per core"),
-        "inference": OneOf(("numpy", "torch"), none="numpy"),
     }
-    _env = {"MREXPLORE_THREADS": "threads", "MREXPLORE_INFERENCE": "inference", "MREXPLORE_MAPS": "maps_dir"}
+    _env = {"MREXPLORE_THREADS": "threads", "MREXPLORE_MAPS": "maps_dir"}
 
 
 def runtime_from_env() -> RuntimeConfig:
@@ -123,9 +119,9 @@ class RunConfig(Checked):
     """Training only (``mrexplore train``), which also reads ``sim`` and ``mission`` (its faults and
     replanning; the step budget is ``train.episodes.max_steps``)."""
     predictor: PredictorTrainConfig = field(default_factory=PredictorTrainConfig)
-    """The map predictor's training only (``mrexplore train --predictor``), which also reads ``sim``."""
+    """The map predictor's training only (``mrexplore train --target predictor``), which also reads ``sim``."""
     runtime: RuntimeConfig = field(default_factory=RuntimeConfig)
-    """How this process runs (threads, the networks' backend, the maps' folder); no result depends on it."""
+    """How this process runs (threads, the maps' folder); no result depends on it."""
 
 
 def read_config_file(path: str | Path, max_bytes: int = 1 << 20) -> RunConfig:

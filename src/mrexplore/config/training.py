@@ -56,7 +56,7 @@ class NcmTrainConfig(Checked):
     """Adam learning rate of the actor."""
     critic_lr_ratio: float = 1.0
     """The critic's learning rate is the actor's times this. NCM's is 0.05 for its CNN critic over the maps;
-    ours (:class:`~mrexplore.global_planning.learned.ncm_network.NcmCritic`) is a small MLP, which at 0.05
+    ours (:class:`~mrexplore.training.ncm_net.NcmCritic`) is a small MLP, which at 0.05
     would barely move from its start in a run of this project's length."""
     gamma: float = 0.99
     """Discount per 25 simulation steps (NCM's decision; a decision of k steps discounts by gamma^(k/25))."""
@@ -235,7 +235,7 @@ class TrainConfig(Checked):
 
 @dataclass(frozen=True)
 class PredictorTrainConfig(Checked):
-    """The learned map predictor and its training (``mrexplore train --predictor``): the team's belief taken
+    """The learned map predictor and its training (``mrexplore train --target predictor``): the team's belief taken
     at random decisions of missions on the training maps (never the dev maps), the ground truth as the label;
     the loss and the scores count the unknown cells near a frontier."""
 

@@ -18,6 +18,7 @@ from mrexplore.pipeline.registry import (
     make_strategy,
     policy_for,
     register_strategy,
+    strategy_for_run,
     strategy_names,
     strategy_spec,
 )
@@ -92,6 +93,7 @@ __all__ = [
     "make_strategy",
     "policy_for",
     "register_strategy",
+    "strategy_for_run",
     "strategy_names",
     "strategy_spec",
 ]

@@ -22,7 +22,7 @@ __all__ = ["NcmPipeline"]
 class NcmPipeline(ExplorationPipeline):
     """NeuralCoMapping re-implemented in 2D (Ye, Dong et al., CVPR 2022): its candidates are frontier
     cells clear of obstacles pooled to 0.4 m nodes (:mod:`~mrexplore.global_planning.ncm_nodes`), one node
-    per cluster; its planner (:class:`~mrexplore.global_planning.learned.ncm_network.NcmPlanner`) lets
+    per cluster; its planner (:class:`~mrexplore.training.ncm_net.NcmPlanner`) lets
     every robot pick a node; robots drive to their node. Where no frontier cell keeps clear of obstacles
     (passages under 0.4 m wide) the plain F_un cells are pooled instead."""
 

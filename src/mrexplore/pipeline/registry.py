@@ -17,7 +17,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig
 from mrexplore.types import MrExploreError
@@ -33,6 +33,7 @@ __all__ = [
     "strategy_spec",
     "strategy_names",
     "make_strategy",
+    "strategy_for_run",
     "policy_for",
     "NO_PREDICTOR",
     "TABLE_I",
@@ -51,7 +52,7 @@ class PipelineConfigs:
     local: LocalPlanningConfig = field(default_factory=LocalPlanningConfig)
     coscan: CoScanConfig = field(default_factory=CoScanConfig)
     predictor: str | None = None
-    """The map predictor of the predictive strategies: a file written by ``mrexplore train --predictor``,
+    """The map predictor of the predictive strategies: a file written by ``mrexplore train --target predictor``,
     ``none`` (every unknown cell free) or None (the shipped one)."""
 
 
@@ -167,6 +168,23 @@ def make_strategy(
         pipeline.local = None
         pipeline.name += NO_LOCAL_SUFFIX
     return pipeline
+
+
+def strategy_for_run(
+    name: str, run: Any, local: bool = True, policy: str | None = None, predictor: str | None = None
+) -> ExplorationPipeline:
+    """The strategy ``name`` with a run's settings (a :class:`~mrexplore.config.RunConfig`): what
+    ``mrexplore explore``, the bench and the ROS 2 centre run."""
+    return make_strategy(
+        name,
+        run.global_planning,
+        run.preprocess,
+        run.local_planning,
+        local=local,
+        policy=policy,
+        coscan_cfg=run.coscan,
+        predictor=predictor,
+    )
 
 
 # -- the strategies shipped (their factories: :mod:`mrexplore.pipeline.strategies`) ---------------------------

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from mrexplore.config import GlobalPlanningConfig, runtime_value
+from mrexplore.config import GlobalPlanningConfig
 from mrexplore.global_planning.classical import GeodesicPlanner, NearestPlanner, UtilityPlanner
 from mrexplore.local_planning.router import LocalRouter
 from mrexplore.pipeline.base import ExplorationPipeline
@@ -16,7 +16,6 @@ from mrexplore.pipeline.registry import NO_PREDICTOR, Factory, PipelineConfigs
 
 __all__ = [
     "CENTRE_COMMITMENT",
-    "INFERENCE_ENV",
     "loaded_predictor",
     "nearest",
     "utility",
@@ -97,31 +96,15 @@ def hier_predict_heuristic(c: PipelineConfigs, policy: str | None) -> Exploratio
     return pipeline
 
 
-INFERENCE_ENV = "MREXPLORE_INFERENCE"
-"""The environment variable of the ``runtime.inference`` setting: ``numpy`` (default): the learned strategies
-decide with the NumPy networks, no torch; ``torch``: with the
-torch modules they were trained as (to compare the two, ``benchmarks/inference_parity.py``)."""
-
-
-def _torch_inference() -> bool:
-    return bool(runtime_value("inference") == "torch")
-
-
 def _loaded_policy(kind: str, policy: str | None) -> tuple[Any, dict[str, str]]:
-    """The network of a learned strategy's policy file (``kind`` hier or ncm; None: the shipped one), NumPy's
-    or torch's by :data:`INFERENCE_ENV`, and what a mission's record says of the file."""
+    """The network of a learned strategy's policy file (``kind`` a learned method's; None: the shipped one), by
+    the method's loader (NumPy's, unless training's :func:`~mrexplore.training.twins.decide_with_torch` changed
+    it), and what a mission's record says of the file."""
     from pathlib import Path
 
-    from mrexplore.global_planning.learned.policy_file import LoadedPolicy, load_ncm_policy_np, load_policy_np
+    from mrexplore.global_planning.learned.methods import learned_method
 
-    path = Path(policy) if policy else None
-    loaded: LoadedPolicy[Any]
-    if _torch_inference():
-        from mrexplore.global_planning.learned.checkpoint import load_ncm_policy, load_policy
-
-        loaded = load_policy(path) if kind == "hier" else load_ncm_policy(path)
-    else:
-        loaded = load_policy_np(path) if kind == "hier" else load_ncm_policy_np(path)
+    loaded = learned_method(kind).load(Path(policy) if policy else None)
     info = {"path": str(loaded.path), "sha256": loaded.sha256, "code_version": str(loaded.meta["code_version"])}
     return loaded.net, info
 

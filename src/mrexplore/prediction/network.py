@@ -447,12 +447,13 @@ def _not_predictor(path: Path, why: str) -> MrExploreError:
 
 
 def load_predictor(path: Path | str | None = None) -> MapPredictor:
-    """A predictor file written by ``mrexplore train --predictor`` (None: the shipped one); one-line errors
+    """A predictor file written by ``mrexplore train --target predictor`` (None: the shipped one); one-line errors
     for every way it can be wrong."""
     path = Path(path) if path is not None else default_predictor_path()
     if not path.is_file():
         raise MrExploreError(
-            f"predictor file {path} not found; pass a file written by 'mrexplore train --predictor' with --predictor"
+            f"predictor file {path} not found; pass a file written by 'mrexplore train --target predictor' "
+            "with --predictor"
         )
     if path.stat().st_size > MAX_PREDICTOR_BYTES:
         raise _not_predictor(path, f"{path.stat().st_size} bytes, over the {MAX_PREDICTOR_BYTES}-byte limit")

@@ -102,7 +102,7 @@ def plot_predictor_curve(log_csv: Path, png: Path, kept_epoch: int) -> bool:
         ax1.plot([kept_epoch], [col("val_loss")[k]], "*", ms=16, color="gold", mec="black", label=f"kept: {kept_epoch}")
     ax1.set_ylabel("cross-entropy (unknown cells near a frontier)")
     ax1.legend(loc="upper right", fontsize=8)
-    ax1.set_title(f"mrexplore train --predictor: {len(rows)} epoch{'s' * (len(rows) != 1)}, kept {kept_epoch}")
+    ax1.set_title(f"mrexplore train --target predictor: {len(rows)} epoch{'s' * (len(rows) != 1)}, kept {kept_epoch}")
     ax2.plot(x, col("val_accuracy"), "s-", color="tab:green", label="validation accuracy")
     ax2.plot(x, col("val_iou"), "^-", color="tab:red", label="validation IoU of free space")
     ax2.set_xlabel("epoch")

@@ -14,10 +14,10 @@ import numpy as np
 import torch
 
 from mrexplore.config import MapConfig, MissionConfig, SimConfig, TrainConfig
-from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS
-from mrexplore.global_planning.learned.ncm_network import NcmCritic, NcmNet, NcmPlanner, NcmStep
-from mrexplore.global_planning.learned.network import MultiGraphNet
-from mrexplore.global_planning.learned.policy import LearnedPlanner, PolicyStep
+from mrexplore.global_planning.learned.features import GraphInputs
+from mrexplore.global_planning.learned.ncm_inputs import NcmInputs
+from mrexplore.global_planning.learned.ncm_planner import NcmPlanner
+from mrexplore.global_planning.learned.policy import LearnedPlanner
 from mrexplore.maps.loaders import load_map_shared
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import ExplorationPipeline, NcmPipeline, make_strategy
@@ -25,6 +25,7 @@ from mrexplore.pipeline.strategies import loaded_predictor
 from mrexplore.prediction.network import MapPredictor
 from mrexplore.runtime.threads import THREADS_ENV
 from mrexplore.sim.measures import steps_to_coverage
+from mrexplore.training.checkpoint import VALUE_INPUTS
 from mrexplore.training.expert import (
     ExpertLabel,
     candidate_assignments,
@@ -32,6 +33,11 @@ from mrexplore.training.expert import (
     lookahead_returns,
     privileged_scalars,
 )
+from mrexplore.training.hier_net import MultiGraphNet
+from mrexplore.training.ncm_net import NcmActorCritic, NcmStep, ncm_collate
+from mrexplore.training.ncm_policy import per_robot_log_prob
+from mrexplore.training.sequential import PolicyStep
+from mrexplore.training.twins import torch_twin
 from mrexplore.types import MrExploreError
 
 __all__ = [
@@ -88,21 +94,12 @@ class EpisodeJob:
     free) or None (the shipped one)."""
 
 
-class NcmActorCritic(torch.nn.Module):
-    """NCM's actor and our critic, trained together (one state dict, one optimiser with two learning rates);
-    only the actor is a policy file."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.actor = NcmNet()
-        self.critic = NcmCritic(extra=VALUE_INPUTS)
+def new_net(cfg: TrainConfig) -> torch.nn.Module:
+    """A new torch network of the method ``cfg.strategy`` trains."""
+    return torch_twin(cfg.strategy).new_net(cfg)
 
 
-def new_net(cfg: TrainConfig) -> MultiGraphNet | NcmActorCritic:
-    return NcmActorCritic() if cfg.strategy == "ncm" else MultiGraphNet(cfg.learned, VALUE_INPUTS)
-
-
-def policy_net(net: MultiGraphNet | NcmActorCritic) -> MultiGraphNet | NcmNet:
+def policy_net(net: torch.nn.Module) -> torch.nn.Module:
     """What a policy file holds: the whole mGNN (its critic included), or NCM's actor alone."""
     return net.actor if isinstance(net, NcmActorCritic) else net
 
@@ -228,7 +225,12 @@ def _run_expert(job: EpisodeJob, net: MultiGraphNet) -> dict[str, Any]:
 def _run_ppo(job: EpisodeJob, net: MultiGraphNet) -> dict[str, Any]:
     cfg = job.cfg
     record: list[PolicyStep] = []
-    planner = _planner(job, net, sample=True, rng=np.random.default_rng([job.seed, 11]), record=record)
+    extra = [np.zeros(net.value_inputs, np.float32)]  # the critic's scalars at the coming decision
+
+    def recorded(g: GraphInputs, order: np.ndarray, choices: np.ndarray, logp: float) -> None:
+        record.append(PolicyStep(g, order, choices, logp, net.value_at(g, extra[0]), extra[0]))
+
+    planner = _planner(job, net, sample=True, rng=np.random.default_rng([job.seed, 11]), on_sample=recorded)
     m = episode_mission(job, hier_pipeline(planner))
     rewards: list[float] = []
     discounts: list[float] = []
@@ -236,7 +238,7 @@ def _run_ppo(job: EpisodeJob, net: MultiGraphNet) -> dict[str, Any]:
     before_pose = 0.0
     while m.advance():
         before_pose = m.reward_since_decision  # a pose that ends the mission resets it
-        planner.value_extra = privileged_scalars(m)
+        extra[0] = privileged_scalars(m)
         n_before = len(record)
         if m.pose() is None:
             continue  # the end (advance says so next), or a round where the centre heard nobody
@@ -274,7 +276,15 @@ def _run_ncm(job: EpisodeJob, net: NcmActorCritic) -> dict[str, Any]:
             decisions += 1
         return {"map": job.map_spec, **_episode_stats(m, decisions)}
     record: list[NcmStep] = []
-    planner = NcmPlanner(net.actor, sample=True, critic=net.critic, record=record)
+    extra = [np.zeros(VALUE_INPUTS, np.float32)]  # the critic's scalars at the coming decision
+
+    def recorded(inputs: NcmInputs, rows: np.ndarray, picks: np.ndarray, out: np.ndarray) -> None:
+        with torch.no_grad():
+            value = float(net.critic(ncm_collate([inputs]), torch.from_numpy(extra[0])[None])[0])
+        logp = float(per_robot_log_prob(torch.from_numpy(rows), torch.from_numpy(np.asarray(picks, np.int64))))
+        record.append(NcmStep(inputs, out.copy(), logp, value, extra[0]))
+
+    planner = NcmPlanner(net.actor, sample=True, on_sample=recorded)
     m = episode_mission(job, ncm_pipeline(planner))
     cell_m2 = job.cfg.episodes.resolution_m**2
     rewards: list[float] = []
@@ -288,7 +298,7 @@ def _run_ncm(job: EpisodeJob, net: NcmActorCritic) -> dict[str, Any]:
         discounts.append(ncfg.gamma ** (k / 25.0))
 
     while m.advance():
-        planner.value_extra = privileged_scalars(m)
+        extra[0] = privileged_scalars(m)
         n_before = len(record)
         if m.pose() is None:
             continue  # the end (advance says so next), or a round where the centre heard nobody

@@ -1,4 +1,4 @@
-"""Training of the map predictor (``mrexplore train --predictor``): beliefs taken at random decisions of
+"""Training of the map predictor (``mrexplore train --target predictor``): beliefs taken at random decisions of
 missions on the training maps, the truth as the label, a small U-Net fitted to them on random crops.
 
 One loop (:func:`train_predictor`) with marked stages: collect (training missions, then validation

@@ -16,10 +16,12 @@ import numpy as np
 import torch
 
 from mrexplore.config import TrainConfig
-from mrexplore.global_planning.learned.network import MultiGraphNet
+from mrexplore.global_planning.learned.methods import learned_method
 from mrexplore.training.episodes import EpisodeJob, JobKind, NcmActorCritic, training_jobs, weights_of
 from mrexplore.training.expert import ExpertLabel
+from mrexplore.training.hier_net import MultiGraphNet
 from mrexplore.training.search import cross_entropy_step, relative_score, search_candidates
+from mrexplore.training.twins import torch_twin
 from mrexplore.training.updates import fit_imitation, hier_ppo_update, ncm_ppo_update
 
 __all__ = ["TrainState", "StageContext", "Stage", "Baseline", "Search", "Dagger", "Ppo", "NcmPpo", "stages_of"]
@@ -107,7 +109,7 @@ class Baseline(Stage):
 
     def validation_weights(self, ctx: StageContext) -> bytes | None:
         # hier's baseline is the heuristic, which None weights select; NCM's is its untrained network
-        return None if ctx.cfg.strategy == "hier" else weights_of(ctx.net)
+        return None if learned_method(ctx.cfg.strategy).starts_from_heuristic else weights_of(ctx.net)
 
 
 class Search(Stage):
@@ -213,16 +215,27 @@ class NcmPpo(Stage):
         return row | ncm_ppo_update(ctx.net, ctx.opt, results, cfg, ctx.rng)
 
 
-def stages_of(cfg: TrainConfig) -> list[Stage]:
-    """A run's stages in order: NCM's baseline and PPO; hier's baseline, search, DAgger and PPO."""
-    if cfg.strategy == "ncm":
-        return [Baseline("baseline"), *(NcmPpo(f"ppo{k}") for k in range(cfg.ncm.ppo_iterations))]
+def _hier_stages(cfg: TrainConfig) -> list[Stage]:
     return [
         Baseline("baseline"),
         *(Search(f"search{k}") for k in range(cfg.search_generations)),
         *(Dagger(f"dagger{k}") for k in range(cfg.dagger_rounds)),
         *(Ppo(f"ppo{k}") for k in range(cfg.ppo_iterations)),
     ]
+
+
+def _ncm_stages(cfg: TrainConfig) -> list[Stage]:
+    return [Baseline("baseline"), *(NcmPpo(f"ppo{k}") for k in range(cfg.ncm.ppo_iterations))]
+
+
+STAGES: dict[str, Callable[[TrainConfig], list[Stage]]] = {"hier": _hier_stages, "ncm": _ncm_stages}
+"""Each trainable learned method's stages (by its kind): hier's baseline, search, DAgger and PPO; NCM's
+baseline and PPO."""
+
+
+def stages_of(cfg: TrainConfig) -> list[Stage]:
+    """A run's stages in order."""
+    return STAGES[torch_twin(cfg.strategy).kind](cfg)
 
 
 def collect_row(results: Sequence[dict[str, Any]]) -> dict[str, Any]:

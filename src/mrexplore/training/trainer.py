@@ -22,19 +22,19 @@ import numpy as np
 import torch
 
 from mrexplore.config import MissionConfig, SimConfig, TrainConfig, config_to_dict
-from mrexplore.global_planning.learned.checkpoint import code_version, save_policy
 from mrexplore.global_planning.learned.features import GraphInputs
+from mrexplore.global_planning.learned.methods import learned_method
 from mrexplore.runtime.csv_append import append_row
 from mrexplore.runtime.progress import Progress
 from mrexplore.runtime.threads import THREADS_ENV
 from mrexplore.runtime.workers import JobRunner
+from mrexplore.training.checkpoint import code_version, save_policy
 from mrexplore.training.curve import plot_learning_curve
 from mrexplore.training.episodes import (
     FRESH_SEED0,
     VAL_SEED0,
     EpisodeJob,
     JobKind,
-    NcmActorCritic,
     init_worker,
     new_net,
     policy_net,
@@ -45,6 +45,7 @@ from mrexplore.training.expert import ExpertLabel
 from mrexplore.training.run_folder import RunFolder
 from mrexplore.training.search import relative_score
 from mrexplore.training.stages import StageContext, TrainState, stages_of
+from mrexplore.training.twins import torch_twin
 from mrexplore.training.updates import optimizer
 from mrexplore.types import MrExploreError
 
@@ -267,7 +268,7 @@ def train(
 
 def _predictor_info(cfg: TrainConfig, predictor: str | None) -> dict[str, str] | None:
     """What the run's record says of the map predictor of a policy that reads one; None for the others."""
-    if not (cfg.strategy == "hier" and cfg.learned.reads_prediction):
+    if not learned_method(cfg.strategy).reads_prediction(cfg.learned):
         return None
     from mrexplore.pipeline.strategies import loaded_predictor
 
@@ -333,7 +334,7 @@ def _validated(
         row["val_score"] = float(relative_score(per_map[0], per_map[1], ref[0], ref[1]))
         chosen_by = "val_score"
     cov_key = "val_coverage_mean"
-    if cfg.strategy == "ncm":  # NCM's own evaluation samples: validate that too (seeded per map)
+    if learned_method(cfg.strategy).validates_sampled:  # NCM's own evaluation samples: validate it too (seeded)
         steps_s, cov_s, _ = validate(weights, JobKind.EVAL_SAMPLED)
         row["val_sampled_steps_mean"], row["val_sampled_coverage_mean"] = steps_s, cov_s
         if cfg.ncm.select == "sampled":
@@ -454,15 +455,10 @@ def validate_policy(
     in order, then ``(2, maps)`` steps to the end and to 99% coverage (all its steps where an episode never
     got there), and each map's final coverage. ``policy`` None: the heuristic, hier-heuristic (for
     ``cfg.strategy`` ncm, the shipped NCM policy)."""
-    from mrexplore.global_planning.learned.checkpoint import load_ncm_policy, load_policy
-
     weights = None
-    if cfg.strategy == "ncm":
-        both = NcmActorCritic()
-        both.actor.load_state_dict(load_ncm_policy(policy).net.state_dict())
-        weights = weights_of(both)
-    elif policy is not None:
-        weights = weights_of(load_policy(policy).net)
+    if policy is not None or not learned_method(cfg.strategy).starts_from_heuristic:
+        twin = torch_twin(cfg.strategy)
+        weights = weights_of(twin.as_trained(twin.load(policy).net))
     val_maps = maps if maps is not None else split_maps(train_dir, cfg.val_maps, cfg.episodes.plans)[1]
     with _Runner(workers, None) as runner:
         jobs = [EpisodeJob(JobKind.EVAL, m, cfg.val_robots, i, weights, cfg, i) for i, m in enumerate(val_maps)]

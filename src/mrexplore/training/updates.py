@@ -11,12 +11,12 @@ import numpy as np
 import torch
 
 from mrexplore.config import TrainConfig
-from mrexplore.global_planning.learned.ncm_network import NcmStep, ncm_collate, ncm_log_prob
-from mrexplore.global_planning.learned.network import MultiGraphNet, collate
-from mrexplore.global_planning.learned.policy import PolicyStep, assignment_score, sequential_log_prob
 from mrexplore.training.episodes import NcmActorCritic
 from mrexplore.training.expert import ExpertLabel
+from mrexplore.training.hier_net import MultiGraphNet, collate
+from mrexplore.training.ncm_net import NcmStep, ncm_collate, ncm_log_prob
 from mrexplore.training.ppo import PPOStats, gae, listwise_loss, ppo_loss
+from mrexplore.training.sequential import PolicyStep, assignment_score, sequential_log_prob
 
 __all__ = ["fit_imitation", "imitation_loss", "hier_ppo_update", "ncm_ppo_update", "optimizer"]
 

@@ -13,13 +13,13 @@ from random_problems import random_problem as _random_problem
 
 from mrexplore.config import LearnedConfig, MapConfig, SimConfig
 from mrexplore.global_planning.classical import UtilityPlanner, utility_cost
-from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS, default_policy_path, load_policy, save_policy
 from mrexplore.global_planning.learned.features import graph_inputs
-from mrexplore.global_planning.learned.network import MultiGraphNet, collate
 from mrexplore.global_planning.learned.policy import LearnedPlanner
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec, run_mission
 from mrexplore.pipeline import make_strategy
+from mrexplore.training.checkpoint import VALUE_INPUTS, default_policy_path, load_policy, save_policy
+from mrexplore.training.hier_net import MultiGraphNet, collate
 from mrexplore.types import MrExploreError
 
 TIMING = {"wall_s", "plan_ms_mean", "plan_ms_p95", "peak_mb", "onboard_ms_median", "onboard_ms_p95"}
@@ -51,7 +51,7 @@ def test_a_silent_scoring_mlp_is_skipped_with_the_same_costs() -> None:
     rng = np.random.default_rng(3)
     for _ in range(100):
         p = _random_problem(rng)
-        _, affinity, _ = planner.affinity(p)
+        _, affinity = planner.affinity(p)
         with torch.no_grad():
             batch = collate([graph_inputs(p, net.cfg, planner.heuristic)])
             whole = net.residual(*net.encode(batch), batch)[0, : p.n_robots, : len(p.clusters)].double().numpy()
@@ -133,8 +133,8 @@ def test_snapshot_restore_replays_exactly_and_pose_commit_equals_decide() -> Non
 
 
 def test_ncm_policy_round_trip_and_refusals(tmp_path: Path) -> None:
-    from mrexplore.global_planning.learned.checkpoint import load_ncm_policy
-    from mrexplore.global_planning.learned.ncm_network import NcmConfig, NcmNet
+    from mrexplore.training.checkpoint import load_ncm_policy
+    from mrexplore.training.ncm_net import NcmConfig, NcmNet
 
     torch.manual_seed(0)
     net = NcmNet(NcmConfig(hidden=16, blocks=2))
@@ -172,8 +172,12 @@ def test_shipped_ncm_policy_loads_by_default_and_explores(name: str) -> None:
 
 
 def test_a_learned_planner_runs_torch_on_one_thread() -> None:
+    from random_problems import random_problem
+
     torch.set_num_threads(2)
-    LearnedPlanner(MultiGraphNet(LearnedConfig()))
+    net = MultiGraphNet(LearnedConfig())
+    torch.nn.init.normal_(net.score[-1].weight)  # a scoring MLP that adds something: the torch path runs
+    LearnedPlanner(net).assign(random_problem(np.random.default_rng(0)))
     assert torch.get_num_threads() == 1
 
 
@@ -197,8 +201,8 @@ def test_hier_predict_is_hier_over_the_predictive_cost() -> None:
         states = np.array([CellState.FREE, CellState.UNKNOWN, CellState.OCCUPIED], np.uint8)
         problem = replace(random_problem(rng), state=states[rng.choice(3, size=(50, 50), p=[0.5, 0.4, 0.1])])
         gains = predicted_terms(None, problem, GlobalPlanningConfig()).gain_m2
-        _, cost_hier, _ = hier._cost(problem)
-        _, cost_pred, _ = weighted._cost(problem)
+        _, cost_hier = hier._cost(problem)
+        _, cost_pred = weighted._cost(problem)
         reachable = np.isfinite(cost_hier)
         assert np.array_equal(reachable, np.isfinite(cost_pred))
         expected = np.broadcast_to(0.5 * gains, cost_hier.shape)[reachable]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 import torch
 
-from mrexplore.global_planning.learned.ncm_network import NcmBatch, NcmConfig, NcmNet
+from mrexplore.training.ncm_net import NcmBatch, NcmConfig, NcmNet
 
 
 def _decision(m: int, n: int, seed: int) -> dict[str, torch.Tensor]:
@@ -85,7 +85,7 @@ def test_the_ncm_pipeline_decides_on_pooled_nodes_and_explores_a_map() -> None:
     from conftest import state_grid
 
     from mrexplore.config import MapConfig, MissionConfig, SimConfig
-    from mrexplore.global_planning.learned.ncm_network import NcmPlanner
+    from mrexplore.global_planning.learned.ncm_planner import NcmPlanner
     from mrexplore.maps.loaders import load_map
     from mrexplore.mission import MissionSpec, run_mission
     from mrexplore.pipeline import DecisionInput, NcmPipeline
@@ -136,7 +136,7 @@ def test_window_masks_far_nodes_unless_a_robot_has_none_near() -> None:
     reachable one (nodes 0 and 2; node 1 is unreachable)."""
     import math
 
-    from mrexplore.global_planning.learned.ncm_network import ncm_inputs
+    from mrexplore.global_planning.learned.ncm_inputs import ncm_inputs
 
     inf = math.inf
     p = _problem(
@@ -153,14 +153,14 @@ def test_window_masks_far_nodes_unless_a_robot_has_none_near() -> None:
 def test_critic_ignores_padding_and_log_prob_matches_the_policy() -> None:
     import numpy as np
 
-    from mrexplore.global_planning.learned.ncm_network import (
+    from mrexplore.training.ncm_net import (
         NcmCritic,
         NcmInputs,
         NcmStep,
         ncm_collate,
         ncm_log_prob,
     )
-    from mrexplore.global_planning.learned.ncm_policy import per_robot_log_prob
+    from mrexplore.training.ncm_policy import per_robot_log_prob
 
     torch.manual_seed(4)
 
@@ -190,7 +190,7 @@ def test_matched_decoding_spreads_robots_that_stand_together() -> None:
     """Two robots in one cell have equal rows of the plan: argmax sends both to the same node for ever
     (on Willow Garage two of three robots shared every goal from step 30 on); the matched decoding of the
     same logits gives them different nodes, and a third robot shares once the two nodes are taken."""
-    from mrexplore.global_planning.learned.ncm_network import NcmPlanner
+    from mrexplore.global_planning.learned.ncm_planner import NcmPlanner
 
     torch.manual_seed(5)
     net = NcmNet().eval()

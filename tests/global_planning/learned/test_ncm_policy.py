@@ -8,13 +8,13 @@ import math
 import torch
 
 from mrexplore.global_planning.learned.ncm_planner import first_best
-from mrexplore.global_planning.learned.ncm_policy import (
+from mrexplore.training.ncm_policy import (
     per_robot_entropy,
     per_robot_log_prob,
     per_robot_sample,
     robot_logits,
 )
-from mrexplore.global_planning.learned.sinkhorn import log_optimal_transport
+from mrexplore.training.sinkhorn import log_optimal_transport
 
 
 def test_log_prob_sums_to_one_over_every_joint_action_and_factorises() -> None:

@@ -8,7 +8,7 @@ import torch
 
 from mrexplore.config import LearnedConfig
 from mrexplore.global_planning.learned.features import CLUSTER_FEATURES, EDGE_FEATURES, ROBOT_FEATURES, GraphInputs
-from mrexplore.global_planning.learned.network import MultiGraphNet, collate
+from mrexplore.training.hier_net import MultiGraphNet, collate
 
 
 def _random_inputs(rng: np.random.Generator, R: int, C: int) -> GraphInputs:

@@ -15,15 +15,15 @@ from random_problems import random_problem as _random_problem
 
 from mrexplore.cli.common import TORCH_MISSING
 from mrexplore.config import LearnedConfig
-from mrexplore.global_planning.learned.checkpoint import VALUE_INPUTS, load_ncm_policy, load_policy
 from mrexplore.global_planning.learned.features import graph_inputs
 from mrexplore.global_planning.learned.ncm_inputs import NcmConfig, ncm_inputs
-from mrexplore.global_planning.learned.ncm_network import NcmNet, ncm_collate
 from mrexplore.global_planning.learned.ncm_planner import NcmPlanner
-from mrexplore.global_planning.learned.network import MultiGraphNet, collate
 from mrexplore.global_planning.learned.numpy_nets import GraphNetNp, NcmNetNp
 from mrexplore.global_planning.learned.policy import LearnedPlanner
 from mrexplore.global_planning.learned.policy_file import load_ncm_policy_np, load_policy_np
+from mrexplore.training.checkpoint import VALUE_INPUTS, load_ncm_policy, load_policy
+from mrexplore.training.hier_net import MultiGraphNet, collate
+from mrexplore.training.ncm_net import NcmNet, ncm_collate
 
 
 def _numpy_state(net: torch.nn.Module) -> dict[str, np.ndarray]:

@@ -10,12 +10,8 @@ import numpy as np
 import pytest
 import torch
 
-from mrexplore.global_planning.learned.policy import (
-    assignment_score,
-    hungarian_decode,
-    sample_sequential,
-    sequential_log_prob,
-)
+from mrexplore.global_planning.learned.policy import hungarian_decode, sample_sequential
+from mrexplore.training.sequential import assignment_score, sequential_log_prob
 
 AFF = np.array([[1.0, 0.0, -1.0], [0.5, 2.0, 0.0], [0.0, 0.3, 0.7]])
 

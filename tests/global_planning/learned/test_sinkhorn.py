@@ -7,7 +7,7 @@ import math
 import numpy as np
 import torch
 
-from mrexplore.global_planning.learned.sinkhorn import log_optimal_transport
+from mrexplore.training.sinkhorn import log_optimal_transport
 
 
 def _reference(scores: np.ndarray, dustbin: float, iters: int, mask: np.ndarray | None = None) -> np.ndarray:

@@ -1,24 +1,28 @@
-"""NeuralCoMapping behind the global-planner protocol, on its NumPy network (no torch) or its torch one
-(training, which records log-probabilities and values)."""
+"""NeuralCoMapping behind the global-planner protocol, on a NumPy scoring protocol (:class:`NcmScorer`): the
+NumPy network (what the strategies run) and training's torch one both answer it; training records what it
+needs through :attr:`NcmPlanner.on_sample`. Nothing here imports torch."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.learned.ncm_inputs import NcmInputs, ncm_inputs
-from mrexplore.global_planning.learned.numpy_nets import NcmNetNp
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
-from mrexplore.runtime.threads import thread_count
 
-if TYPE_CHECKING:
-    from mrexplore.global_planning.learned.ncm_network import NcmCritic, NcmNet
-
-__all__ = ["NcmPlanner", "NcmStep", "matched_targets_np", "first_best", "TIE_TOL"]
+__all__ = [
+    "NcmPlanner",
+    "NcmScorer",
+    "NcmSampleHook",
+    "matched_targets_np",
+    "first_best",
+    "TIE_TOL",
+]
 
 TIE_TOL = 1e-3
 """Logits this close count as equal when deciding: a robot takes the first of the nodes within ``TIE_TOL`` of
@@ -39,16 +43,22 @@ def first_best(rows: NDArray[np.floating]) -> NDArray[np.int64]:
     return np.argmax(rows >= best - TIE_TOL, axis=1).astype(np.int64)
 
 
-@dataclass(frozen=True)
-class NcmStep:
-    """One sampled decision, for PPO: the inputs, each robot's node (:data:`UNASSIGNED` for a robot with
-    none allowed), the joint log-probability, the critic's value and its scalars."""
+class NcmScorer(Protocol):
+    """What NCM's planner asks of its network, in NumPy: each robot's logits over the nodes, and a draw of one
+    node per robot from them (the network's own sampler: NumPy's on the NumPy network, torch's on training's)."""
 
-    inputs: NcmInputs
-    targets: NDArray[np.int64]
-    logp: float
-    value: float
-    extra: NDArray[np.float32]
+    def logits(self, x: NcmInputs) -> NDArray[np.float32]:
+        """``(m, n)`` per-robot logits, ``-inf`` where a pair is not allowed."""
+        ...
+
+    def draw(self, rows: NDArray[np.float32], seed: int) -> NDArray[np.int64]:
+        """``(m,)`` one node per row, drawn from softmax(row) with generator seed ``seed``."""
+        ...
+
+
+NcmSampleHook = Callable[[NcmInputs, NDArray[np.float32], NDArray[np.int64], NDArray[np.int64]], None]
+"""Called with a sampled decision's inputs, the allowed robots' logit rows, their picks and every robot's node
+(training records it)."""
 
 
 def matched_targets_np(logits: NDArray[np.floating]) -> NDArray[np.int64]:
@@ -72,46 +82,23 @@ class NcmPlanner:
     take the joint choice of largest summed logit with every node used once before any is shared. A robot
     with no allowed node gets none.
 
-    ``net`` is the NumPy network (what the strategies run) or the torch one (training). With ``record``
-    (a list) and a ``critic``, each sampled decision is appended as an :class:`NcmStep` (torch only);
-    ``value_extra`` holds the critic's scalars for the next decision. Sampled draws come from NumPy on the
-    NumPy network and from torch on the torch one: the same distribution, not the same draws."""
+    ``net`` answers :class:`NcmScorer`: the NumPy network (what the strategies run) or training's torch one;
+    ``on_sample`` is called after each sampled decision. Sampled draws come from the network's own sampler:
+    the same distribution on either, not the same draws."""
 
-    net: NcmNetNp | NcmNet
+    net: NcmScorer
     sample: bool = False
     name: str = "ncm"
     match: bool = False
-    critic: NcmCritic | None = None
-    record: list[NcmStep] | None = None
-    value_extra: NDArray[np.float32] | None = None
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.net, NcmNetNp):
-            import torch
-
-            if torch.get_num_threads() > thread_count():  # as LearnedPlanner: one mission per core in the bench
-                torch.set_num_threads(thread_count())
-        elif self.record is not None:
-            raise ValueError("recording NCM decisions needs the torch network")
+    on_sample: NcmSampleHook | None = None
 
     def logits(self, problem: AssignmentProblem) -> NDArray[np.float32]:
         """``(R, N)`` per-robot logits (``-inf`` where not allowed)."""
-        return self._logits(ncm_inputs(problem))[0]
-
-    def _logits(self, inputs: NcmInputs) -> tuple[NDArray[np.float32], Any]:
-        if isinstance(self.net, NcmNetNp):
-            return self.net.logits(inputs), None
-        import torch
-
-        from mrexplore.global_planning.learned.ncm_network import ncm_collate
-
-        batch = ncm_collate([inputs])
-        with torch.no_grad():
-            return self.net(batch)[0].numpy(), batch
+        return self.net.logits(ncm_inputs(problem))
 
     def assign(self, problem: AssignmentProblem) -> Assignment:
         inputs = ncm_inputs(problem)
-        logits, batch = self._logits(inputs)
+        logits = self.net.logits(inputs)
         ok = np.isfinite(logits).any(axis=1)
         out = np.full(problem.n_robots, UNASSIGNED, dtype=np.int64)
         if not ok.any():
@@ -119,40 +106,12 @@ class NcmPlanner:
         rows = logits[ok]
         if self.sample:
             seed = int(problem.rng.integers(2**62)) if problem.rng is not None else 0
-            picks = self._draw(rows, seed)
+            picks = self.net.draw(rows, seed)
         elif self.match:
             picks = matched_targets_np(np.round(rows.astype(np.float64) / TIE_TOL) * TIE_TOL)
         else:
             picks = first_best(rows)
         out[ok] = picks
-        if self.record is not None:
-            self._record(inputs, batch, rows, picks, out)
+        if self.on_sample is not None and self.sample:
+            self.on_sample(inputs, rows, picks, out)
         return Assignment(out)
-
-    def _draw(self, rows: NDArray[np.float32], seed: int) -> NDArray[np.int64]:
-        if isinstance(self.net, NcmNetNp):
-            z = rows.astype(np.float64)
-            p = np.exp(z - z.max(axis=1, keepdims=True))
-            p /= p.sum(axis=1, keepdims=True)
-            rng = np.random.default_rng(seed)
-            return np.array([rng.choice(len(q), p=q) for q in p], dtype=np.int64)
-        import torch
-
-        from mrexplore.global_planning.learned.ncm_policy import per_robot_sample
-
-        return per_robot_sample(torch.from_numpy(rows), torch.Generator().manual_seed(seed)).numpy()
-
-    def _record(
-        self, inputs: NcmInputs, batch: Any, rows: NDArray[np.float32], picks: NDArray[np.int64], out: NDArray[np.int64]
-    ) -> None:
-        import torch
-
-        from mrexplore.global_planning.learned.ncm_policy import per_robot_log_prob
-
-        if self.critic is None or self.value_extra is None or self.record is None:
-            raise ValueError("recording NCM decisions needs a critic and value_extra")
-        extra = np.asarray(self.value_extra, np.float32)
-        with torch.no_grad():
-            value = float(self.critic(batch, torch.from_numpy(extra)[None])[0])
-        logp = float(per_robot_log_prob(torch.from_numpy(rows), torch.from_numpy(np.asarray(picks, np.int64))))
-        self.record.append(NcmStep(inputs, out.copy(), logp, value, extra))

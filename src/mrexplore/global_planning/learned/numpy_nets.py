@@ -21,7 +21,7 @@ from mrexplore.config import LearnedConfig
 from mrexplore.global_planning.learned.features import GraphInputs, edge_feature_count
 from mrexplore.global_planning.learned.ncm_inputs import NcmConfig, NcmInputs
 
-__all__ = ["GraphNetNp", "NcmNetNp", "log_optimal_transport_np"]
+__all__ = ["GraphNetNp", "NcmNetNp", "draw_np", "log_optimal_transport_np"]
 
 F32 = NDArray[np.float32]
 _MASKED = np.float32(-1e9)
@@ -162,6 +162,11 @@ class GraphNetNp:
         """The linear edge path's part of the residual, ``(R, C)``."""
         return g.edges @ self.edge_weights.astype(np.float32)
 
+    def residual_of(self, g: GraphInputs) -> NDArray[np.float64]:
+        """The learned residual ``(R, C) float64`` (the :class:`~mrexplore.global_planning.learned.policy.HierScorer`
+        protocol)."""
+        return self.residual(g).astype(np.float64)
+
     def residual(self, g: GraphInputs) -> F32:
         """The learned part of the affinity, ``(R, C)``: the scoring MLP over the encoded nodes plus the
         linear edge path (the edge path alone where the MLP scores nothing)."""
@@ -219,6 +224,21 @@ class _NcmCross:
         return x + self.update(np.concatenate([x, wts @ self.v(y)], axis=-1))
 
 
+def draw_np(rows: NDArray[np.float32], seed: int) -> NDArray[np.int64]:
+    """``(m,)`` one node per row from softmax(row), NumPy's generator seeded by ``seed``.
+
+    Examples
+    --------
+    >>> draw_np(np.array([[0.0, -np.inf], [-np.inf, 5.0]], np.float32), 0).tolist()
+    [0, 1]
+    """
+    z = rows.astype(np.float64)
+    p = np.exp(z - z.max(axis=1, keepdims=True))
+    p /= p.sum(axis=1, keepdims=True)
+    rng = np.random.default_rng(seed)
+    return np.array([rng.choice(len(q), p=q) for q in p], dtype=np.int64)
+
+
 def log_optimal_transport_np(scores: F32, dustbin: float, iters: int, mask: NDArray[np.bool_] | None = None) -> F32:
     """:func:`~.sinkhorn.log_optimal_transport` in NumPy: the ``(m + 1, n + 1)`` log plan with a dustbin.
 
@@ -259,6 +279,10 @@ class NcmNetNp:
         self.to_robots = [_NcmCross(w, f"to_robots.{i}") for i in blocks]
         self.dustbin = float(w.get("dustbin").reshape(()))
         w.check_all_used()
+
+    def draw(self, rows: F32, seed: int) -> NDArray[np.int64]:
+        """One node per robot from its logit row, NumPy's generator seeded by ``seed``."""
+        return draw_np(rows, seed)
 
     def logits(self, x: NcmInputs) -> F32:
         """``(m, n)`` per-robot logits, ``-inf`` where a pair is not allowed."""

@@ -1,41 +1,50 @@
 """The learned global planner: mGNN affinities decoded by the Hungarian algorithm (evaluation) or sampled by
 robots choosing one after another without replacement (training), with an exact log-probability.
 
-Deciding runs on the NumPy network (no torch); torch is imported only by the training functions here and
-where the planner is given the torch network."""
+The planner sees its network only through :class:`HierScorer`, a NumPy scoring protocol: the NumPy network
+(what the strategies run) and training's torch one both answer it, and training records what it needs
+through :attr:`LearnedPlanner.on_sample`. Nothing here imports torch."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.config import GlobalPlanningConfig
+from mrexplore.config import GlobalPlanningConfig, LearnedConfig
 from mrexplore.global_planning.classical import utility_cost
 from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs
-from mrexplore.global_planning.learned.numpy_nets import GraphNetNp
 from mrexplore.global_planning.predictive import PredictionAhead, predicted_cost, predicted_terms
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 from mrexplore.prediction.network import MapPredictor
 from mrexplore.types import StateGrid
 
-if TYPE_CHECKING:
-    from torch import Tensor
+__all__ = ["HierScorer", "LearnedPlanner", "SampleHook", "edge_path64", "hungarian_decode", "sample_sequential"]
 
-    from mrexplore.global_planning.learned.network import MultiGraphNet
 
-__all__ = [
-    "LearnedPlanner",
-    "edge_path64",
-    "PolicyStep",
-    "hungarian_decode",
-    "sample_sequential",
-    "sequential_log_prob",
-    "assignment_score",
-]
+class HierScorer(Protocol):
+    """What the learned planner asks of its network, in NumPy: the network's settings, the weights of its
+    linear edge path, whether its scoring MLP adds nothing, and the learned residual at one decision."""
+
+    @property
+    def cfg(self) -> LearnedConfig: ...
+
+    @property
+    def edge_weights(self) -> NDArray[np.float64]: ...
+
+    def scores_nothing(self) -> bool: ...
+
+    def residual_of(self, g: GraphInputs) -> NDArray[np.float64]:
+        """The learned residual ``(R, C) float64`` at one decision's inputs."""
+        ...
+
+
+SampleHook = Callable[[GraphInputs, NDArray[np.int64], NDArray[np.int64], float], None]
+"""Called with a sampled decision's inputs, robot order, choices and log-probability (training records it)."""
 
 
 def hungarian_decode(affinity: NDArray[np.floating]) -> NDArray[np.int64]:
@@ -90,50 +99,6 @@ def sample_sequential(
     return order, choices, logp
 
 
-def sequential_log_prob(affinity: Tensor, order: Tensor, choices: Tensor) -> tuple[Tensor, Tensor]:
-    """Log-probability and entropy ``(B,)`` of ``choices`` under the sequential policy, batched.
-
-    ``affinity (B, R, C)`` with ``-inf`` for forbidden pairs; ``order (B, R)`` robot indices (-1 for
-    padding); ``choices (B, R)`` cluster per robot (-1 for none). The entropy is that of each robot's
-    choice given those before it, summed (the joint entropy given the order, in expectation).
-    """
-    import torch
-
-    B, R, C = affinity.shape
-    taken = torch.zeros(B, C, dtype=torch.bool)
-    logp = affinity.new_zeros(B)
-    entropy = affinity.new_zeros(B)
-    rows = torch.arange(B)
-    for t in range(R):
-        i = order[:, t]
-        valid = i >= 0
-        logits = affinity[rows, i.clamp(min=0)]
-        allowed = torch.isfinite(logits) & valid[:, None]
-        free = allowed & ~taken
-        avail = torch.where(free.any(-1, keepdim=True), free, allowed)
-        has = avail.any(-1)
-        lp = torch.log_softmax(torch.where(avail, logits, torch.full_like(logits, -1e9)), dim=-1)
-        c = choices[rows, i.clamp(min=0)]
-        pick = has & (c >= 0)
-        logp = logp + torch.where(pick, lp[rows, c.clamp(min=0)], torch.zeros_like(logp))
-        p = torch.exp(lp) * avail
-        entropy = entropy - torch.where(has, (p * torch.where(avail, lp, torch.zeros_like(lp))).sum(-1), 0.0)
-        taken = taken | (torch.nn.functional.one_hot(c.clamp(min=0), C).bool() & pick[:, None])
-    return logp, entropy
-
-
-def assignment_score(affinity: Tensor, candidates: Tensor) -> Tensor:
-    """Summed affinity (paper eq. 2) of candidate assignments: ``affinity (B, R, C)``, ``candidates
-    (B, M, R)`` cluster per robot (-1: none, or padding) -> ``(B, M)``. Forbidden pairs count 0."""
-    import torch
-
-    B, M, R = candidates.shape
-    safe = torch.where(torch.isfinite(affinity), affinity, torch.zeros_like(affinity))
-    idx = candidates.clamp(min=0)
-    picked = torch.gather(safe[:, None].expand(-1, M, -1, -1), 3, idx[..., None]).squeeze(-1)  # (B, M, R)
-    return (picked * (candidates >= 0)).sum(-1)
-
-
 def edge_path64(g: GraphInputs, w: NDArray[np.floating]) -> NDArray[np.float64]:
     """The linear edge path, ``edges . w`` ``(R, C)``, in float64 (one rounding for every library).
 
@@ -150,19 +115,6 @@ def edge_path64(g: GraphInputs, w: NDArray[np.floating]) -> NDArray[np.float64]:
 
 
 @dataclass
-class PolicyStep:
-    """What the sampling planner did at one decision (for PPO)."""
-
-    inputs: GraphInputs
-    order: NDArray[np.int64]
-    choices: NDArray[np.int64]
-    logp: float
-    value: float
-    extra: NDArray[np.float32]
-    """The critic's privileged scalars at this decision."""
-
-
-@dataclass
 class LearnedPlanner:
     """The paper's learned global layer behind the :class:`GlobalPlanner` protocol.
 
@@ -171,14 +123,13 @@ class LearnedPlanner:
     ``net`` is the NumPy network (what the strategies run) or the torch one (training; ``record`` needs it).
     """
 
-    net: GraphNetNp | MultiGraphNet
+    net: HierScorer
     heuristic: GlobalPlanningConfig = field(default_factory=GlobalPlanningConfig)
     name: str = "learned"
     sample: bool = False
     rng: np.random.Generator | None = None
-    record: list[PolicyStep] | None = None
-    value_extra: NDArray[np.float32] | None = None
-    """Privileged scalars for the critic at the next decision (set by the trainer; the actor never reads them)."""
+    on_sample: SampleHook | None = None
+    """Called after each sampled decision (training's recorder)."""
     predictor: MapPredictor | None = None
     """The map predictor of a policy that reads the predicted gain, or of ``gain_cost`` (None: every unknown
     cell taken for free)."""
@@ -187,23 +138,9 @@ class LearnedPlanner:
     ``heuristic.gain_weight`` per m^2 of predicted gain), not explore_lite's alone (strategy ``hier-predict``)."""
     min_robots: int = 1
     """Deterministic decisions of a smaller team take the heuristic cost alone, without the residual (the
-    strategies set it from :attr:`~mrexplore.config.GlobalPlanningConfig.learned_min_robots`; sampling and
-    recording for training always add it)."""
+    strategies set it from :attr:`~mrexplore.config.GlobalPlanningConfig.learned_min_robots`; sampling for
+    training always adds it)."""
     ahead: PredictionAhead = field(default_factory=PredictionAhead, init=False, repr=False, compare=False)
-
-    def __post_init__(self) -> None:
-        if isinstance(self.net, GraphNetNp):
-            if self.record is not None:
-                raise ValueError("recording decisions for PPO needs the torch network")
-            return
-        import torch
-
-        # torch runs on one intra-op thread in a process that holds a learned planner. The network's tensors
-        # are too small to gain from threads, and its OpenMP workers spin after every call, taking the cores
-        # from the distance-field threads of the same decision and from other processes (with two threads,
-        # two bench workers made a decision several times slower).
-        if torch.get_num_threads() != 1:
-            torch.set_num_threads(1)
 
     def begin(self, state: StateGrid, resolution_m: float) -> None:
         """Start predicting ``state``, the grid of the problem that :meth:`assign` will get next (where this
@@ -234,47 +171,30 @@ class LearnedPlanner:
             g = replace(g, base=base)
         return g, cost
 
-    def affinity(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64], float]:
-        """E_rc ``(R, C) float64`` (``-inf`` where unreachable), with the inputs and the critic's value.
+    def affinity(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64]]:
+        """E_rc ``(R, C) float64`` (``-inf`` where unreachable), with the inputs.
 
         E_rc = -(cost - base_scale * residual) / base_scale, the cost being explore_lite's in float64.
         """
-        g, cost, value = self._cost(problem)
-        return g, -cost / self.net.cfg.base_scale, value
+        g, cost = self._cost(problem)
+        return g, -cost / self.net.cfg.base_scale
 
-    def _cost(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64], float]:
+    def _cost(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64]]:
         """The affinity in cost form, ``cost - base_scale * residual`` (``inf`` where unreachable)."""
         g, cost = self._inputs(problem)
-        if problem.n_robots < self.min_robots and self.record is None and not self.sample:
-            return g, cost, 0.0
-        if self.record is None and self.net.scores_nothing():
+        if problem.n_robots < self.min_robots and not self.sample:
+            return g, cost
+        if self.net.scores_nothing():
             # The scoring MLP adds zero: the residual is the linear edge path alone, and the blocks of
             # attention would run for nothing (1.1 of the 1.7 ms the learned assignment took a decision at
             # 8 robots on the largest HouseExpo map). It is computed in float64, on either network: in
             # float32 its rounding depended on the library (and on the CPU's code path), and assignments
             # whose sums tie exactly (robots swapping clusters at equal distances) went one way or the other.
-            return g, cost - self.net.cfg.base_scale * edge_path64(g, self.net.edge_weights), 0.0
-        if isinstance(self.net, GraphNetNp):
-            return g, cost - self.net.cfg.base_scale * self.net.residual(g).astype(np.float64), 0.0
-        import torch
-
-        from mrexplore.global_planning.learned.network import collate
-
-        with torch.no_grad():
-            batch = collate([g])
-            value = 0.0
-            vr, vc = self.net.encode(batch)
-            learned = self.net.residual(vr, vc, batch)
-            if self.record is not None:
-                extra = torch.zeros(1, self.net.value_inputs)
-                if self.value_extra is not None:
-                    extra = torch.from_numpy(self.value_extra[None])
-                value = float(self.net.value_of(vr, vc, batch, extra)[0])
-        residual = learned[0, : g.n_robots, : g.n_clusters].double().numpy()
-        return g, cost - self.net.cfg.base_scale * residual, value  # inf stays inf
+            return g, cost - self.net.cfg.base_scale * edge_path64(g, self.net.edge_weights)
+        return g, cost - self.net.cfg.base_scale * self.net.residual_of(g)  # inf stays inf
 
     def assign(self, problem: AssignmentProblem) -> Assignment:
-        g, cost, value = self._cost(problem)
+        g, cost = self._cost(problem)
         if not self.sample:
             # Hungarian on E_rc (eq. 2) in cost form, argmin sum (cost - scale * residual): with a zero
             # residual exactly the utility planner's matching (no float rounding of its ties).
@@ -282,8 +202,6 @@ class LearnedPlanner:
         aff = -cost / self.net.cfg.base_scale
         rng = self.rng or problem.rng or np.random.default_rng()
         order, choices, logp = sample_sequential(aff, rng)
-        if self.record is not None:
-            assert not isinstance(self.net, GraphNetNp)  # refused at construction
-            extra = self.value_extra if self.value_extra is not None else np.zeros(self.net.value_inputs, np.float32)
-            self.record.append(PolicyStep(g, order, choices, logp, value, extra))
+        if self.on_sample is not None:
+            self.on_sample(g, order, choices, logp)
         return Assignment(choices)

@@ -1,7 +1,8 @@
 """Policy files without torch: NumPy archives of float32 weights with a JSON header (format, network config,
 weights digest, code version, meta), read with ``allow_pickle=False`` (a policy file runs no code).
 
-A policy in torch's archive format, as older versions wrote them, is still read where torch is installed.
+A policy in torch's archive format, as older versions wrote them, is read by training's loaders (which have
+torch); deciding refuses it in one line saying so.
 """
 
 from __future__ import annotations
@@ -84,7 +85,11 @@ class PolicyFile:
         return {k: self.header.get(k) for k in ("code_version", "meta", config_key)}
 
 
-def read_policy_file(path: Path | None, fmt: str) -> PolicyFile:
+TorchReader = Callable[[Path], "tuple[dict[str, Any], State]"]
+"""Reads a policy in torch's archive format (training's loaders hand one in)."""
+
+
+def read_policy_file(path: Path | None, fmt: str, read_torch: TorchReader | None = None) -> PolicyFile:
     """The checked content of a policy file of format ``fmt`` (default: the shipped one of that format);
     one-line errors for every way it can be wrong."""
     default = default_ncm_policy_path() if fmt == NCM_FORMAT else default_policy_path()
@@ -95,7 +100,7 @@ def read_policy_file(path: Path | None, fmt: str) -> PolicyFile:
         raise MrExploreError(
             f"policy file {path} is {path.stat().st_size} bytes, over the {MAX_POLICY_BYTES}-byte limit of a policy"
         )
-    header, state = _read_any(path)
+    header, state = _read_any(path, read_torch)
     if header.get("format") not in KINDS:
         raise _not_policy(path, "no format tag")
     if header["format"] != fmt:
@@ -118,8 +123,9 @@ def _not_policy(path: Path, why: str) -> MrExploreError:
     return MrExploreError(f"policy file {path} is not a mrexplore policy ({why}); retrain it")
 
 
-def _read_any(path: Path) -> tuple[dict[str, Any], State]:
-    """Header and weights of a NumPy policy archive, or of a torch one (older versions) where torch is here."""
+def _read_any(path: Path, read_torch: TorchReader | None) -> tuple[dict[str, Any], State]:
+    """Header and weights of a NumPy policy archive, or of a torch one (older versions) where a reader of them
+    is given."""
     try:
         with zipfile.ZipFile(path) as z:
             names = z.namelist()
@@ -131,7 +137,12 @@ def _read_any(path: Path) -> tuple[dict[str, Any], State]:
     if _HEADER + ".npy" in names:
         return _read_npz(path)
     if any(n.endswith("data.pkl") for n in names):
-        return _read_torch(path)
+        if read_torch is None:
+            raise MrExploreError(
+                f"policy file {path} is in torch's format (an older mrexplore wrote it); load it once with "
+                "mrexplore.training.checkpoint.load_policy and write it with save_policy (needs torch), or retrain it"
+            )
+        return read_torch(path)
     raise _not_policy(path, "no header")
 
 
@@ -146,30 +157,6 @@ def _read_npz(path: Path) -> tuple[dict[str, Any], State]:
         ) from None
     if not isinstance(header, dict):
         raise _not_policy(path, "its header is no mapping")
-    return header, state
-
-
-def _read_torch(path: Path) -> tuple[dict[str, Any], State]:
-    try:
-        import torch
-    except ImportError:
-        raise MrExploreError(
-            f"policy file {path} is in torch's format (an older mrexplore wrote it); install torch to read it "
-            "(pip install 'mrexplore[train]'), or load and save it once with torch installed"
-        ) from None
-    try:
-        blob = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as exc:  # noqa: BLE001 - torch raises many kinds for a file that is not a checkpoint
-        raise MrExploreError(
-            f"policy file {path} is not a mrexplore policy ({type(exc).__name__}); retrain it"
-        ) from None
-    if not isinstance(blob, dict) or not isinstance(blob.get("state_dict"), dict):
-        raise _not_policy(path, "no format tag")
-    raw = blob["state_dict"]
-    if not all(isinstance(v, torch.Tensor) for v in raw.values()):
-        raise _not_policy(path, "its weights are no tensors")
-    state = {k: v.detach().float().contiguous().numpy() for k, v in raw.items()}
-    header = {k: v for k, v in blob.items() if k != "state_dict"}
     return header, state
 
 

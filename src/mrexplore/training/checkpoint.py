@@ -10,8 +10,6 @@ from typing import Any
 import torch
 
 from mrexplore.config import config_to_dict
-from mrexplore.global_planning.learned.ncm_network import NcmNet
-from mrexplore.global_planning.learned.network import MultiGraphNet
 from mrexplore.global_planning.learned.policy_file import (
     HIER_FORMAT,
     MAX_POLICY_BYTES,
@@ -29,6 +27,9 @@ from mrexplore.global_planning.learned.policy_file import (
     weights_digest,
     write_policy_file,
 )
+from mrexplore.training.hier_net import MultiGraphNet
+from mrexplore.training.ncm_net import NcmNet
+from mrexplore.types import MrExploreError
 
 __all__ = [
     "save_policy",
@@ -67,7 +68,7 @@ def _with_weights(net: torch.nn.Module, state: dict[str, Any]) -> None:
 def load_policy(path: Path | None = None) -> LoadedPolicy[MultiGraphNet]:
     """Load a ``hier`` policy written by :func:`save_policy` (default: the shipped one) into torch; one-line
     errors."""
-    pf = read_policy_file(path, HIER_FORMAT)
+    pf = read_policy_file(path, HIER_FORMAT, _read_torch)
 
     def build() -> MultiGraphNet:
         net = MultiGraphNet(*hier_config(pf))
@@ -80,7 +81,7 @@ def load_policy(path: Path | None = None) -> LoadedPolicy[MultiGraphNet]:
 def load_ncm_policy(path: Path | None = None) -> LoadedNcmPolicy:
     """Load an ``ncm`` policy written by :func:`save_policy` (default: the shipped one) into torch; one-line
     errors."""
-    pf = read_policy_file(path, NCM_FORMAT)
+    pf = read_policy_file(path, NCM_FORMAT, _read_torch)
 
     def build() -> NcmNet:
         net = NcmNet(ncm_config(pf))
@@ -88,3 +89,21 @@ def load_ncm_policy(path: Path | None = None) -> LoadedNcmPolicy:
         return net
 
     return built(pf, build)
+
+
+def _read_torch(path: Path) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Header and weights of a policy in torch's archive format, as older versions wrote them."""
+    try:
+        blob = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as exc:  # noqa: BLE001 - torch raises many kinds for a file that is not a checkpoint
+        raise MrExploreError(
+            f"policy file {path} is not a mrexplore policy ({type(exc).__name__}); retrain it"
+        ) from None
+    if not isinstance(blob, dict) or not isinstance(blob.get("state_dict"), dict):
+        raise MrExploreError(f"policy file {path} is not a mrexplore policy (no format tag); retrain it")
+    raw = blob["state_dict"]
+    if not all(isinstance(v, torch.Tensor) for v in raw.values()):
+        raise MrExploreError(f"policy file {path} is not a mrexplore policy (its weights are no tensors); retrain it")
+    state = {k: v.detach().float().contiguous().numpy() for k, v in raw.items()}
+    header = {k: v for k, v in blob.items() if k != "state_dict"}
+    return header, state

@@ -7,7 +7,7 @@ cross attention both ways whose weights come from an MLP over [query, key, dista
 update is a residual MLP of [features, message]. Robot-node scores (scaled dot products) are masked where a
 node lies outside the robot's window or out of its reach, log-softmaxed over the robots, and put through
 the log-space Sinkhorn layer with a learned dustbin; each robot's row, sharpened, is its policy's logits
-(:mod:`~mrexplore.global_planning.learned.ncm_policy`).
+(:mod:`~mrexplore.training.ncm_policy`).
 
 Batches hold decisions padded to the largest team and node count; padding changes no output (tested).
 """
@@ -19,22 +19,36 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
+from numpy.typing import NDArray
 from torch import Tensor, nn
 
 from mrexplore.global_planning.learned.ncm_inputs import NcmConfig, NcmInputs, ncm_inputs
-from mrexplore.global_planning.learned.ncm_planner import NcmPlanner, NcmStep
-from mrexplore.global_planning.learned.ncm_policy import per_robot_entropy, per_robot_log_prob
-from mrexplore.global_planning.learned.sinkhorn import log_optimal_transport
+from mrexplore.global_planning.learned.policy_file import VALUE_INPUTS
 from mrexplore.global_planning.ncm_nodes import POSITION_SCALE_M, WINDOW_M
 from mrexplore.global_planning.protocol import UNASSIGNED, AssignmentProblem
+from mrexplore.runtime.threads import thread_count
+from mrexplore.training.ncm_policy import per_robot_entropy, per_robot_log_prob, per_robot_sample
+from mrexplore.training.sinkhorn import log_optimal_transport
 
 __all__ = [
-    "NcmConfig", "NcmBatch", "NcmNet", "NcmCritic", "NcmInputs", "NcmPlanner", "NcmStep", "ncm_batch",
+    "NcmConfig", "NcmBatch", "NcmNet", "NcmCritic", "NcmInputs", "NcmStep", "NcmActorCritic", "ncm_batch",
     "ncm_collate", "ncm_inputs", "ncm_log_prob", "WINDOW_M",
 ]  # fmt: skip
 
 _MASKED = -1e9
 """Attention logit of a masked key: exp() underflows to 0 beside any real key, and stays finite."""
+
+
+@dataclass(frozen=True)
+class NcmStep:
+    """One sampled decision, for PPO: the inputs, each robot's node (:data:`UNASSIGNED` for a robot with
+    none allowed), the joint log-probability, the critic's value and its scalars."""
+
+    inputs: NcmInputs
+    targets: NDArray[np.int64]
+    logp: float
+    value: float
+    extra: NDArray[np.float32]
 
 
 @dataclass
@@ -105,6 +119,20 @@ class NcmNet(nn.Module):
         self.to_nodes = nn.ModuleList(_CrossAttention(d) for _ in range(cfg.blocks))
         self.to_robots = nn.ModuleList(_CrossAttention(d) for _ in range(cfg.blocks))
         self.dustbin = nn.Parameter(torch.tensor(1.0))
+
+    def logits(self, x: NcmInputs) -> NDArray[np.float32]:
+        """``(m, n)`` per-robot logits of one decision, in NumPy, so that NCM's planner decides on this
+        network as on the NumPy one (:class:`~mrexplore.global_planning.learned.ncm_planner.NcmScorer`)."""
+        if torch.get_num_threads() > thread_count():  # one mission per core in the bench and the trainer
+            torch.set_num_threads(thread_count())
+        with torch.no_grad():
+            out: NDArray[np.float32] = self(ncm_collate([x]))[0].numpy()
+        return out
+
+    def draw(self, rows: NDArray[np.float32], seed: int) -> NDArray[np.int64]:
+        """One node per robot from its logit row, torch's generator seeded by ``seed``."""
+        picks: NDArray[np.int64] = per_robot_sample(torch.from_numpy(rows), torch.Generator().manual_seed(seed)).numpy()
+        return picks
 
     def forward(self, b: NcmBatch) -> Tensor:
         B, R, N = b.dist.shape
@@ -195,3 +223,20 @@ def ncm_log_prob(net: NcmNet, steps: list[NcmStep]) -> tuple[Tensor, Tensor]:
         logps.append(per_robot_log_prob(rows, torch.from_numpy(s.targets[robots.numpy()])))
         ents.append(per_robot_entropy(rows))
     return torch.stack(logps), torch.stack(ents)
+
+
+class NcmActorCritic(torch.nn.Module):
+    """NCM's actor and our critic, trained together (one state dict, one optimiser with two learning rates);
+    only the actor is a policy file."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.actor = NcmNet()
+        self.critic = NcmCritic(extra=VALUE_INPUTS)
+
+    @classmethod
+    def around(cls, actor: torch.nn.Module) -> NcmActorCritic:
+        """A fresh critic beside the weights of ``actor`` (a loaded policy's)."""
+        both = cls()
+        both.actor.load_state_dict(actor.state_dict())
+        return both

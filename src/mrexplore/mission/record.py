@@ -1,5 +1,6 @@
-"""What a mission's run leaves: the record ``explore --json`` prints (what ran, its measures, the starts and
-every setting), its text summary, and strict JSON of it."""
+"""What a mission leaves for people and files: its record (what ran, its measures, the starts and every
+setting; what ``mrexplore explore --json`` and ``ros2 launch --json`` print), its text summary, and strict
+JSON of it."""
 
 from __future__ import annotations
 

@@ -186,6 +186,27 @@ class MultiGraphNet(nn.Module):
         )
         return self.score(pair).squeeze(-1) + self.edge_path(batch)
 
+    def residual_of(self, g: GraphInputs) -> NDArray[np.float64]:
+        """The learned residual ``(R, C) float64`` at one decision, so that the learned planner decides on this
+        network as on the NumPy one (:class:`~mrexplore.global_planning.learned.policy.HierScorer`)."""
+        # torch runs on one intra-op thread where it decides: the network's tensors are too small to gain from
+        # threads, and its OpenMP workers spin after every call, taking the cores from the distance-field
+        # threads of the same decision and from other processes.
+        if torch.get_num_threads() != 1:
+            torch.set_num_threads(1)
+        with torch.no_grad():
+            batch = collate([g])
+            vr, vc = self.encode(batch)
+            learned = self.residual(vr, vc, batch)
+        return learned[0, : g.n_robots, : g.n_clusters].double().numpy()
+
+    def value_at(self, g: GraphInputs, extra: NDArray[np.float32]) -> float:
+        """The critic's value at one decision, ``extra`` its privileged scalars."""
+        with torch.no_grad():
+            batch = collate([g])
+            vr, vc = self.encode(batch)
+            return float(self.value_of(vr, vc, batch, torch.from_numpy(np.asarray(extra, np.float32)[None]))[0])
+
     def scores_nothing(self) -> bool:
         """True where the scoring MLP's last layer is all zero (weights and bias): its part of the residual is
         then zero whatever the nodes, and the residual is the linear edge path alone. So is an untrained
