@@ -34,7 +34,7 @@ from mrexplore.training.expert import (
     privileged_scalars,
 )
 from mrexplore.training.hier_net import MultiGraphNet
-from mrexplore.training.ncm_net import NcmActorCritic, NcmStep, ncm_collate
+from mrexplore.training.ncm_net import NcmActorCritic, NcmNet, NcmStep, ncm_collate
 from mrexplore.training.ncm_policy import per_robot_log_prob
 from mrexplore.training.sequential import PolicyStep
 from mrexplore.training.twins import torch_twin
@@ -94,12 +94,12 @@ class EpisodeJob:
     free) or None (the shipped one)."""
 
 
-def new_net(cfg: TrainConfig) -> torch.nn.Module:
+def new_net(cfg: TrainConfig) -> MultiGraphNet | NcmActorCritic:
     """A new torch network of the method ``cfg.strategy`` trains."""
     return torch_twin(cfg.strategy).new_net(cfg)
 
 
-def policy_net(net: torch.nn.Module) -> torch.nn.Module:
+def policy_net(net: MultiGraphNet | NcmActorCritic) -> MultiGraphNet | NcmNet:
     """What a policy file holds: the whole mGNN (its critic included), or NCM's actor alone."""
     return net.actor if isinstance(net, NcmActorCritic) else net
 

@@ -29,7 +29,7 @@ class TorchTwin:
     """A learned method's torch side."""
 
     kind: str
-    new_net: Callable[[TrainConfig], torch.nn.Module]
+    new_net: Callable[[TrainConfig], MultiGraphNet | NcmActorCritic]
     """The network a training run of these settings starts from (actor and critic together)."""
     load: Callable[[Path | None], Any]
     """A policy file into the torch network (None: the shipped one), which answers the same NumPy scoring
