@@ -24,8 +24,9 @@ from mrexplore.config import GlobalPlanningConfig, MapConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import MissionSpec, run_mission
 from mrexplore.pipeline import make_strategy
+from mrexplore.prediction.encoding import belief_channels, pool_factor
 from mrexplore.prediction.gain import predicted_gain_m2
-from mrexplore.prediction.network import belief_channels, load_predictor, pool_factor
+from mrexplore.prediction.network import load_predictor
 from mrexplore.types import MrExploreError
 
 

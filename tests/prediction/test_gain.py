@@ -13,7 +13,8 @@ from mrexplore.global_planning.predictive import PredictionAhead, PredictiveUtil
 from mrexplore.global_planning.protocol import AssignmentProblem
 from mrexplore.prediction.baselines import predict_all_free
 from mrexplore.prediction.gain import predicted_gain_m2
-from mrexplore.prediction.network import MapPredictor, UNetNp, layer_shapes
+from mrexplore.prediction.network import MapPredictor
+from mrexplore.prediction.unet import UNetNp, layer_shapes
 from mrexplore.preprocessing.clustering import Clusters
 from mrexplore.types import CellState
 

@@ -9,19 +9,9 @@ import numpy as np
 import pytest
 from conftest import state_grid
 
-from mrexplore.prediction.network import (
-    PREDICTOR_FORMAT,
-    REACH_M,
-    MapPredictor,
-    UNetNp,
-    _conv,
-    _conv_up_and_skip,
-    _Scratch,
-    belief_channels,
-    layer_shapes,
-    load_predictor,
-    phase_weights,
-)
+from mrexplore.prediction.encoding import belief_channels
+from mrexplore.prediction.network import PREDICTOR_FORMAT, REACH_M, MapPredictor, load_predictor
+from mrexplore.prediction.unet import UNetNp, _conv, _conv_up_and_skip, _Scratch, layer_shapes, phase_weights
 from mrexplore.runtime.weights_archive import write_weights_archive
 from mrexplore.types import CellState, MrExploreError
 

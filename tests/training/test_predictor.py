@@ -11,7 +11,8 @@ import pytest
 import torch
 
 from mrexplore.config import EpisodesConfig, PredictorTrainConfig
-from mrexplore.prediction.network import UNetNp, load_predictor
+from mrexplore.prediction.network import load_predictor
+from mrexplore.prediction.unet import UNetNp
 from mrexplore.training.predictor import (
     PREDICTOR_LOG_COLUMNS,
     BeliefJob,

@@ -8,7 +8,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.prediction.network import POOL_LEVELS
+from mrexplore.prediction.encoding import POOL_LEVELS
 from mrexplore.prediction.quality import near_frontier
 from mrexplore.types import StateGrid
 
@@ -18,7 +18,7 @@ __all__ = ["pool_share", "pooled_targets"]
 def pool_share(mask: NDArray[np.bool_], factor: int) -> NDArray[np.float32]:
     """``(h, w) float32`` the share of True cells in each ``factor x factor`` block, the grid padded with False
     at its bottom and right to a multiple of ``factor * 2 ** POOL_LEVELS`` (as
-    :func:`~mrexplore.prediction.network.belief_channels` pads).
+    :func:`~mrexplore.prediction.encoding.belief_channels` pads).
 
     Examples
     --------

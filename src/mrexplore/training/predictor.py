@@ -23,7 +23,8 @@ from mrexplore.config import MapConfig, MissionConfig, PredictorTrainConfig, Sim
 from mrexplore.maps.loaders import load_map_shared
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import make_strategy
-from mrexplore.prediction.network import PREDICTOR_FORMAT, belief_channels, pool_factor
+from mrexplore.prediction.encoding import belief_channels, pool_factor
+from mrexplore.prediction.network import PREDICTOR_FORMAT
 from mrexplore.prediction.targets import pooled_targets
 from mrexplore.runtime.csv_append import append_row
 from mrexplore.runtime.progress import Progress

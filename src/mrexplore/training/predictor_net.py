@@ -1,4 +1,4 @@
-"""The map predictor's U-Net in torch, for training; :class:`~mrexplore.prediction.network.UNetNp` runs the
+"""The map predictor's U-Net in torch, for training; :class:`~mrexplore.prediction.unet.UNetNp` runs the
 same weights without torch."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import torch
 from torch import nn
 
-from mrexplore.prediction.network import DILATION, LAYERS, layer_shapes
+from mrexplore.prediction.unet import DILATION, LAYERS, layer_shapes
 
 __all__ = ["PredictorUNet"]
 
