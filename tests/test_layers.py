@@ -105,3 +105,19 @@ def test_no_function_is_above_100_lines_but_numba_kernels() -> None:
                 if lines > 100:
                     long.append(f"{path.relative_to(PACKAGE)}:{node.lineno} {node.name} ({lines} lines)")
     assert not long, long
+
+
+def test_no_module_tests_a_learned_method_by_name_outside_the_registries() -> None:
+    """A learned method is described once (global_planning/learned/methods.py, its torch twin in
+    training/twins.py and its stages in training/stages.py); elsewhere a method is looked up, never compared
+    by name."""
+    allowed = {"global_planning/learned/methods.py", "training/twins.py", "training/stages.py", "pipeline/registry.py"}
+    tests = []
+    for path in PACKAGE.rglob("*.py"):
+        rel = path.relative_to(PACKAGE).as_posix()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if rel not in allowed and isinstance(node, ast.Compare):
+                names = [c.value for c in [node.left, *node.comparators] if isinstance(c, ast.Constant)]
+                if any(n in ("hier", "ncm", "predictor") for n in names):
+                    tests.append(f"{rel}:{node.lineno}")
+    assert not tests, tests

@@ -77,8 +77,10 @@ def run_train(args: argparse.Namespace) -> str:
     run = run_config(args)
     if args.minutes is not None and not (math.isfinite(args.minutes) and args.minutes > 0):
         raise MrExploreError(f"--minutes must be > 0, got {args.minutes}")
-    if args.target == "predictor":
-        return _train_predictor(args, run)
+    return {"policy": _train_policy, "predictor": _train_predictor}[args.target](args, run)
+
+
+def _train_policy(args: argparse.Namespace, run: RunConfig) -> str:
     from mrexplore.global_planning.learned.methods import learned_method
 
     method = learned_method(run.train.strategy)
