@@ -1,7 +1,7 @@
 """The shipped networks' forward passes in NumPy float32, so that every strategy runs without torch.
 
-The same weights and the same operations as the torch modules (:class:`~.network.MultiGraphNet`,
-:class:`~.ncm_network.NcmNet`), for one decision at a time (no padding). Torch is needed to train only.
+The same weights and the same operations as the torch modules (:class:`~mrexplore.training.hier_net.MultiGraphNet`,
+:class:`~mrexplore.training.ncm_net.NcmNet`), for one decision at a time (no padding). Torch is needed to train only.
 A forward pass here is a few dozen small matrix products; NumPy's per-call cost is below torch's, so
 inference is no slower (``python benchmarks/policy_inference.py`` measures both side by side). Float32
 sums may round in another order than torch's; the decisions of the dev set are compared row for row by
@@ -128,7 +128,8 @@ class _CrossGraph:
 
 
 class GraphNetNp:
-    """The mGNN's actor (:class:`~.network.MultiGraphNet` without its critic) from a policy's weights."""
+    """The mGNN's actor (:class:`~mrexplore.training.hier_net.MultiGraphNet` without its critic) from a policy's
+    weights."""
 
     def __init__(self, cfg: LearnedConfig, state: Mapping[str, NDArray[np.floating]]) -> None:
         self.cfg = cfg
@@ -240,7 +241,8 @@ def draw_np(rows: NDArray[np.float32], seed: int) -> NDArray[np.int64]:
 
 
 def log_optimal_transport_np(scores: F32, dustbin: float, iters: int, mask: NDArray[np.bool_] | None = None) -> F32:
-    """:func:`~.sinkhorn.log_optimal_transport` in NumPy: the ``(m + 1, n + 1)`` log plan with a dustbin.
+    """:func:`~mrexplore.training.sinkhorn.log_optimal_transport` in NumPy: the ``(m + 1, n + 1)`` log plan with
+    a dustbin.
 
     Examples
     --------
@@ -266,7 +268,8 @@ def log_optimal_transport_np(scores: F32, dustbin: float, iters: int, mask: NDAr
 
 
 class NcmNetNp:
-    """NCM's actor (:class:`~.ncm_network.NcmNet`) from a policy's weights: per-robot logits over the nodes."""
+    """NCM's actor (:class:`~mrexplore.training.ncm_net.NcmNet`) from a policy's weights: per-robot logits over
+    the nodes."""
 
     def __init__(self, cfg: NcmConfig, state: Mapping[str, NDArray[np.floating]]) -> None:
         self.cfg = cfg
