@@ -54,3 +54,35 @@ def test_report_refuses_folders_without_rows(tmp_path: Path, capsys: pytest.Capt
     )
     assert main(["report", "paired", "--runs", str(tmp_path)]) == 2
     assert "must be LABEL=DIR" in capsys.readouterr().err
+
+
+def test_same_rows_tells_a_changed_result_from_a_changed_timing(tmp_path) -> None:
+    """``benchmarks/same_rows.py``: two folders of the same episodes are the same row for row where only
+    timings differ, and differ, naming the column, where a result does."""
+    import csv
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    before, after = tmp_path / "before", tmp_path / "after"
+    args = ["bench", "--maps", "generated:1", "--strategies", "utility", "--robots", "2", "--seeds", "1"]
+    assert main([*args, "--resolution", "0.3", "--max-steps", "150", "--workers", "1", "--out", str(before)]) == 0
+    shutil.copytree(before, after)
+    path = after / "results.csv"
+    rows = list(csv.DictReader(path.open()))
+    script = Path(__file__).resolve().parents[2] / "benchmarks" / "same_rows.py"
+
+    def compare() -> subprocess.CompletedProcess[str]:
+        with path.open("w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+        return subprocess.run([sys.executable, str(script), str(before), str(after)], capture_output=True, text=True)
+
+    rows[0]["wall_s"] = "999.0"
+    same = compare()
+    assert same.returncode == 0 and "1 episodes in both, 0 differ" in same.stdout
+    rows[0]["steps"] = str(int(rows[0]["steps"]) + 1)
+    changed = compare()
+    assert changed.returncode == 1 and "utility, generated:1, robots 2, seed 0: steps" in changed.stdout

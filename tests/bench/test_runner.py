@@ -283,3 +283,12 @@ def test_no_worker_outlives_a_killed_parent(tmp_path) -> None:
     while time.time() < deadline and any(_alive(w) for w in workers):
         time.sleep(0.2)
     assert not any(_alive(w) for w in workers)
+
+
+def test_the_default_settings_keep_the_hash_benches_were_kept_under() -> None:
+    """The settings were regrouped (the predictor's episodes a section of their own, a runtime section): the
+    hash of the defaults is the one it was, so that benches run before resume."""
+    from mrexplore.bench.runner import settings_hash
+    from mrexplore.config import RunConfig
+
+    assert settings_hash(RunConfig()) == "33b270b8fd3ca680"
