@@ -67,7 +67,7 @@ def test_same_rows_tells_a_changed_result_from_a_changed_timing(tmp_path) -> Non
 
     before, after = tmp_path / "before", tmp_path / "after"
     args = ["bench", "--maps", "generated:1", "--strategies", "utility", "--robots", "2", "--seeds", "1"]
-    assert main([*args, "--resolution", "0.3", "--max-steps", "150", "--workers", "1", "--out", str(before)]) == 0
+    assert main([*args, "--resolution", "0.2", "--max-steps", "150", "--workers", "1", "--out", str(before)]) == 0
     shutil.copytree(before, after)
     path = after / "results.csv"
     rows = list(csv.DictReader(path.open()))
