@@ -83,3 +83,61 @@ def test_thresholds_must_leave_a_gap_between_free_and_occupied() -> None:
     with pytest.raises(MrExploreError, match=r"^occupied_min must be in \(free_max \(70\), 100\], got 65$"):
         GridThresholds(free_max=70, occupied_min=65)
     assert checked_values(_msg([[5, -1]]), TH).dtype == np.int8
+
+
+@pytest.mark.parametrize("column", range(10))
+def test_a_one_cell_wall_of_a_finer_map_is_kept_on_every_column(column: int) -> None:
+    """slam_toolbox's 0.05 m map under a 0.1 m team grid: a wall one fine cell thick is kept whether it lies
+    on the first or the second half of a team cell (sampling the team cells' centres kept it on odd fine
+    columns and lost it on even ones)."""
+    rows = [[0] * 20 for _ in range(8)]
+    for r in rows:
+        r[2 * column + column % 2] = 100
+    team = GridFrame(height=4, width=10, resolution_m=0.1)
+    got = state_in_team_frame(_msg(rows, res=0.05), FrameOffset(), team, TH)
+    assert (got[:, column] == X).all()
+    assert (np.delete(got, column, axis=1) == F).all()  # no other cell darkened
+
+
+def _reaches_border(state: np.ndarray, start: tuple[int, int]) -> bool:
+    """Whether a 4-connected walk over cells that are not occupied gets from ``start`` to the grid's border."""
+    seen, todo = {start}, [start]
+    h, w = state.shape
+    while todo:
+        r, c = todo.pop()
+        if r in (0, h - 1) or c in (0, w - 1):
+            return True
+        for n in ((r + 1, c), (r - 1, c), (r, c + 1), (r, c - 1)):
+            if n not in seen and state[n] != X:
+                seen.add(n)
+                todo.append(n)
+    return False
+
+
+@pytest.mark.parametrize("yaw", [0.0, 0.3, math.pi / 4, 1.1, math.pi])
+@pytest.mark.parametrize("shift", [0.0, 0.013, 0.05, 0.077])
+def test_a_closed_room_of_a_finer_map_stays_closed_at_any_offset_and_rotation(yaw: float, shift: float) -> None:
+    """A room 1.5 m square with walls one 0.05 m cell thick, the robot's frame turned and moved in the team
+    frame: on the 0.1 m team grid the room stays closed (no 4-connected way out of it over cells not
+    occupied), and its inside stays free."""
+    n = 30
+    rows = [[-1] * (n + 4) for _ in range(n + 4)]
+    for i in range(2, n + 2):
+        for j in range(2, n + 2):
+            rows[i][j] = 100 if i in (2, n + 1) or j in (2, n + 1) else 0
+    msg = _msg(rows, res=0.05, origin=(-0.85, -0.85, 0.0))  # the room's centre at the robot frame's origin
+    team = GridFrame(height=40, width=40, resolution_m=0.1, origin_xy=(-2.0, -2.0))
+    got = state_in_team_frame(msg, FrameOffset(shift, -shift, yaw), team, TH)
+    centre = team.xy_to_rc(FrameOffset(shift, -shift, yaw).to_team(0.0, 0.0))
+    assert got[centre] == F
+    assert not _reaches_border(got, centre)
+
+
+def test_an_aligned_map_of_the_team_s_cell_size_maps_one_to_one() -> None:
+    """Equal cells, aligned frames: the team grid is the robot's grid, walls not thickened."""
+    rng = np.random.default_rng(3)
+    values = rng.choice([-1, 0, 100], size=(12, 9)).tolist()
+    team = GridFrame(height=12, width=9, resolution_m=0.1, origin_xy=(0.3, -0.2))
+    got = state_in_team_frame(_msg(values, res=0.1, origin=(0.3, -0.2, 0.0)), FrameOffset(), team, TH)
+    want = np.array([[{-1: U, 0: F, 100: X}[v] for v in row] for row in values[::-1]])
+    assert (got == want).all()

@@ -188,7 +188,10 @@ def main() -> None:
             _, err = centre.communicate()
         result["centre_exit"] = centre.returncode
         result["centre_said"] = err.strip().splitlines()[-1] if err.strip() else ""
-        result["warnings"] = [line.split("]: ", 1)[-1] for line in err.splitlines() if "WARN" in line]
+        # The centre node's own warnings (ROS may add its own, e.g. a deprecation warning where
+        # ROS_LOCALHOST_ONLY is set in a ROS user's shell)
+        ours = [line for line in err.splitlines() if "WARN" in line and "[mrexplore_centre]" in line]
+        result["warnings"] = [line.split("]: ", 1)[-1] for line in ours]
         result["record"] = json.loads((work / "c.json").read_text())["finished"]
     finally:
         for p in (centre, robot):

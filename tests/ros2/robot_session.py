@@ -154,7 +154,8 @@ def main() -> None:
         except subprocess.TimeoutExpired:
             robot.kill()
             _, err = robot.communicate()
-        result["warnings"] = [line for line in err.splitlines() if "WARN" in line]
+        # The robot node's own warnings (ROS may add its own, e.g. where ROS_LOCALHOST_ONLY is set)
+        result["warnings"] = [line for line in err.splitlines() if "WARN" in line and "[mrexplore_" in line]
         result["robot_exit"] = robot.returncode
         result["stop_s"] = round(time.monotonic() - t_stop, 2)
     print(json.dumps(result))

@@ -4,11 +4,16 @@ frontier message published, received and read back unchanged."""
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+import types
 from pathlib import Path
 
+import pytest
 from conftest import requires_rclpy
+
+from mrexplore.types import MrExploreError
 
 pytestmark = requires_rclpy
 
@@ -20,8 +25,35 @@ def test_the_team_map_and_a_frontier_message_cross_the_middleware_unchanged() ->
     result = json.loads(out.stdout.strip().splitlines()[-1])
     assert result["map_equal"] and result["bytes_equal"] and result["cells"] > 0
     env = result["env"]
-    assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST" and 1 <= int(env["ROS_DOMAIN_ID"]) <= 101
+    exported = os.environ.get("ROS_DOMAIN_ID")  # a ROS user's own is kept; else one is drawn in 1-101
+    assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+    assert env["ROS_DOMAIN_ID"] == exported if exported else 1 <= int(env["ROS_DOMAIN_ID"]) <= 101
     assert "127.0.0.1" in Path(env["FASTRTPS_DEFAULT_PROFILES_FILE"]).read_text()
+
+
+@pytest.mark.parametrize(("exported", "want"), [("166", "166"), ("0", "0"), ("", None)])
+def test_an_exported_domain_id_is_kept_and_one_is_drawn_only_where_none_is(monkeypatch, exported, want) -> None:
+    from mrexplore.ros2 import loopback
+
+    monkeypatch.setattr(loopback, "sys", types.SimpleNamespace(modules={}))  # as in a process before rclpy
+    for var in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "RMW_IMPLEMENTATION", "FASTRTPS_DEFAULT_PROFILES_FILE"):
+        monkeypatch.setenv(var, "")  # restored after the test, as the variables it sets are
+    monkeypatch.setenv("FASTDDS_DEFAULT_PROFILES_FILE", "")
+    monkeypatch.setenv("ROS_DOMAIN_ID", exported)
+    env = loopback.keep_on_loopback()
+    assert env["ROS_DOMAIN_ID"] == want if want else 1 <= int(env["ROS_DOMAIN_ID"]) <= 101
+
+
+@pytest.mark.parametrize("exported", ["233", "x", "-1"])
+def test_an_exported_domain_id_out_of_range_is_one_line(monkeypatch, exported) -> None:
+    from mrexplore.ros2 import loopback
+
+    monkeypatch.setenv("ROS_DOMAIN_ID", exported)
+    with pytest.raises(MrExploreError) as err:
+        loopback.exported_domain_id()
+    assert str(err.value) == (
+        f"ROS_DOMAIN_ID must be an integer in [0, 232], got {exported!r}; export another, or unset it"
+    )
 
 
 def test_loopback_settings_refuse_to_come_after_rclpy() -> None:

@@ -1,7 +1,9 @@
 """A robot's occupancy grid as ROS publishes it (nav_msgs/OccupancyGrid: -1 unknown, 0-100 occupied %),
 checked and read into the team's grid: the robot's map frame placed in the team frame by a known offset
 (the paper's known initial relative poses), each team cell taking the state of the robot's cell under its
-centre. Plain data in, plain data out: no ROS here (the ROS 2 adapter fills :class:`OccupancyGridData`).
+centre, and every team cell that a robot's occupied cell falls in occupied, so that a map finer than the
+team grid (slam_toolbox's 0.05 m under a 0.1 m team grid) keeps every wall, at any offset and rotation.
+Plain data in, plain data out: no ROS here (the ROS 2 adapter fills :class:`OccupancyGridData`).
 
 Examples
 --------
@@ -122,10 +124,12 @@ def state_in_team_frame(
     msg: OccupancyGridData, offset: FrameOffset, team: GridFrame, thresholds: GridThresholds
 ) -> StateGrid:
     """``(team.height, team.width) uint8`` the robot's grid in the team's grid: each team cell takes the
-    state of the robot's cell under its centre (unknown where none is).
+    state of the robot's cell under its centre (unknown where none is), and is occupied wherever one of the
+    robot's occupied cells falls in it (:func:`_walls_in_team_cells`): a one-cell wall of a finer map would
+    otherwise be kept on some team cells and lost on others, as the team cells' centres fall on it or
+    beside it. A team cell is free only where the robot's cell under its centre says so.
 
-    Placing is nearest-cell: cells of equal size and aligned frames map one to one; a turned frame or
-    another cell size samples the robot's grid at the team cells' centres.
+    Cells of equal size and aligned frames map one to one (the wall rule adds nothing there).
     """
     values = checked_values(msg, thresholds)
     states = np.full(values.shape, CellState.UNKNOWN, dtype=np.uint8)
@@ -146,7 +150,35 @@ def state_in_team_frame(
     i = np.floor(y_g / msg.resolution_m).astype(np.int64)
     inside = (i >= 0) & (i < msg.height) & (j >= 0) & (j < msg.width)
     out[rows[inside], cols[inside]] = states[i[inside], j[inside]]
+    wall_r, wall_c = _walls_in_team_cells(states == CellState.OCCUPIED, msg, offset, team)
+    out[wall_r, wall_c] = CellState.OCCUPIED
     return out
+
+
+_INSET = 0.25
+"""Where a robot's occupied cell is sampled, in its own cells from its centre: the centre and four points a
+quarter cell in along the diagonals. Inside the cell, so that a cell of an aligned grid of equal size lands in
+its own team cell alone; spread, so that each of a finer cell's quarters reaches the team cell it lies in."""
+
+
+def _walls_in_team_cells(
+    occupied: NDArray[np.bool_], msg: OccupancyGridData, offset: FrameOffset, team: GridFrame
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Rows and columns of the team cells that the robot's occupied cells fall in (each sampled at its centre
+    and at four points inset from its corners), placed as :func:`state_in_team_frame` places the grid."""
+    i, j = np.nonzero(occupied)
+    if len(i) == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    ox, oy, oyaw = msg.origin_xyyaw
+    d = np.array([[0.0, 0.0], [-_INSET, -_INSET], [-_INSET, _INSET], [_INSET, -_INSET], [_INSET, _INSET]])
+    x_g = ((j[:, None] + 0.5 + d[None, :, 0]) * msg.resolution_m).ravel()
+    y_g = ((i[:, None] + 0.5 + d[None, :, 1]) * msg.resolution_m).ravel()
+    x_r, y_r = _rotate(x_g, y_g, oyaw)
+    x_t, y_t = offset.to_team(x_r + ox, y_r + oy)
+    col = np.floor((x_t - team.origin_xy[0]) / team.resolution_m).astype(np.int64)
+    row = team.height - 1 - np.floor((y_t - team.origin_xy[1]) / team.resolution_m).astype(np.int64)
+    inside = (row >= 0) & (row < team.height) & (col >= 0) & (col < team.width)
+    return row[inside], col[inside]
 
 
 def _rotate(x: Coordinate, y: Coordinate, yaw: float) -> tuple[Coordinate, Coordinate]:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -242,6 +243,7 @@ def launch_team(
         "wire": wire_summary(centre["wire"]),
         "centre": {k: centre.get(k) for k in ("decisions", "aborts", "goals_resent", "warnings", "finished")},
         "decision_ms_median": _median(centre.get("decision_ms", [])),
+        "ros_domain_id": int(os.environ["ROS_DOMAIN_ID"]) if os.environ.get("ROS_DOMAIN_ID", "").isdigit() else None,
         "logs": str(work),
     }
 

@@ -206,14 +206,12 @@ def start_rclpy(loopback: bool = True) -> Any:
     """rclpy, initialised for a node that takes SIGINT and SIGTERM itself (both raise KeyboardInterrupt in
     its bounded spins). ``loopback``: keep DDS on this machine first
     (:func:`~mrexplore.ros2.loopback.keep_on_loopback`, with the domain already set where it is)."""
-    import os
     import signal
 
     if loopback:
         from mrexplore.ros2.loopback import keep_on_loopback
 
-        domain = os.environ.get("ROS_DOMAIN_ID")
-        keep_on_loopback(int(domain) if domain and domain.isdigit() else None)
+        keep_on_loopback()  # the exported ROS_DOMAIN_ID where there is one (a launch exports its own)
     import rclpy
     from rclpy.signals import SignalHandlerOptions
 
