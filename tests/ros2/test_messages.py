@@ -61,3 +61,35 @@ def test_loopback_settings_refuse_to_come_after_rclpy() -> None:
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert out.returncode != 0
     assert "keep_on_loopback() must run before rclpy is imported; call it first" in out.stderr
+
+
+ROS_ARGS = """
+from mrexplore.ros2.robot_node import start_rclpy
+rclpy = start_rclpy(True, ["--ros-args", "-p", "use_sim_time:=true", "-r", "/robot1/map:=/robot1/slam_map"])
+node = rclpy.create_node("mrexplore_robot1")
+print(node.get_parameter("use_sim_time").value, node.resolve_topic_name("/robot1/map"))
+node.destroy_node()
+rclpy.shutdown()
+"""
+
+
+def test_a_node_takes_ros_own_arguments() -> None:
+    """``--ros-args`` reaches rcl as for any ROS 2 node: a parameter (``use_sim_time``) and a remap."""
+    out = subprocess.run([sys.executable, "-c", ROS_ARGS], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["True", "/robot1/slam_map"]
+
+
+def test_ros_args_are_split_off_and_refused_where_no_node_starts(capsys) -> None:
+    from mrexplore.cli import main
+    from mrexplore.cli.main import split_ros_args
+
+    argv = ["ros2", "centre", "--names", "a", "--ros-args", "-r", "__ns:=/team", "--", "--seed", "3"]
+    assert split_ros_args(argv) == (
+        ["ros2", "centre", "--names", "a", "--seed", "3"],
+        ["--ros-args", "-r", "__ns:=/team"],
+    )
+    assert main(["explore", "--ros-args", "-p", "use_sim_time:=true"]) == 2
+    assert capsys.readouterr().err == (
+        "mrexplore: error: --ros-args is for the ros2 commands that start a node (robot, centre, relay, sim); drop it\n"
+    )

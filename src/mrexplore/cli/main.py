@@ -77,12 +77,42 @@ def _run(args: argparse.Namespace, argv: list[str]) -> None:
         print(run_ros2(args, argv), file=sys.stderr)
 
 
+ROS_ARGS = "--ros-args"
+NODE_COMMANDS = ("robot", "centre", "relay", "sim")
+"""The ros2 commands that start one ROS 2 node, and so take ``--ros-args ...`` (ROS's own arguments)."""
+
+
+def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
+    """The command line's own arguments, and ROS's: ``--ros-args`` and all that follows (up to a ``--``
+    that ends them), as every ROS 2 node takes them.
+
+    Examples
+    --------
+    >>> split_ros_args(["ros2", "robot", "--name", "r1", "--ros-args", "-p", "use_sim_time:=true"])
+    (['ros2', 'robot', '--name', 'r1'], ['--ros-args', '-p', 'use_sim_time:=true'])
+    """
+    if ROS_ARGS not in argv:
+        return argv, []
+    start = argv.index(ROS_ARGS)
+    end = argv.index("--", start) if "--" in argv[start:] else len(argv)
+    return argv[:start] + argv[end + 1 :], argv[start:end]
+
+
 def _main(argv: Sequence[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    own, ros_args = split_ros_args(argv)
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser().parse_args(own)
     except SystemExit as exc:  # argparse's one-line error (exit 2) or --help (exit 0)
         return int(exc.code or 0)
+    if ros_args and not (args.command == "ros2" and args.ros2 in NODE_COMMANDS):
+        print(
+            f"mrexplore: error: {ROS_ARGS} is for the ros2 commands that start a node "
+            f"({', '.join(NODE_COMMANDS)}); drop it",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
+    args.ros_args = ros_args
     if args.maps_dir is not None:
         os.environ[MAPS_ENV] = args.maps_dir  # the runtime.maps_dir setting, here and in spawned workers
     try:

@@ -165,7 +165,7 @@ def run_ros2(args: argparse.Namespace, argv: list[str]) -> str:
     if args.ros2 == "relay":
         from mrexplore.ros2.relay import run_relay
 
-        return run_relay(dep, args.loss, args.seed, loopback=loopback)
+        return run_relay(dep, args.loss, args.seed, loopback=loopback, ros_args=args.ros_args)
     if args.ros2 == "robot":
         from mrexplore.maps.occupancy_grid import FrameOffset
         from mrexplore.ros2.robot_node import RobotNodeSettings, run_robot_node
@@ -177,7 +177,7 @@ def run_ros2(args: argparse.Namespace, argv: list[str]) -> str:
         offset = FrameOffset(*args.offset) if args.offset else (entry.offset if entry else FrameOffset())
         pose_type = args.pose_type or (entry.pose_type if entry else "pose_with_covariance")
         robot = RobotNodeSettings(args.name, index, team, offset, pose_type, run.preprocess, entry=entry)
-        run_robot_node(robot, loopback=loopback)
+        run_robot_node(robot, loopback=loopback, ros_args=args.ros_args)
         return f"robot {args.name} stopped"
     from mrexplore.mission.centre import NO_ORACLE
     from mrexplore.ros2.centre_node import CentreSettings, run_centre_node
@@ -189,7 +189,7 @@ def run_ros2(args: argparse.Namespace, argv: list[str]) -> str:
         check_output(args.record, "--record")
     record = Path(args.record) if args.record else None
     settings = CentreSettings(dep, strategy, team, args.lockstep, record, args.seed, args.direct_maps, run.preprocess)
-    why = run_centre_node(settings, loopback=loopback)
+    why = run_centre_node(settings, loopback=loopback, ros_args=args.ros_args)
     return f"centre stopped: {why}"
 
 
@@ -215,7 +215,7 @@ def _ros2_sim(args: argparse.Namespace, argv: list[str]) -> str:
 
         progress_file = Path(args.progress_file) if args.progress_file else None
         sim_settings = SimSettings(spec, dep, args.lockstep, args.speed, progress_file=progress_file)
-        record = run_sim_node(sim_settings, loopback=not args.network)
+        record = run_sim_node(sim_settings, loopback=not args.network, ros_args=args.ros_args)
         if args.json:
             print(json.dumps(strict_json(record), allow_nan=False))
         return f"simulation ended: {record['done_reason']} after {record['steps']} steps"

@@ -25,6 +25,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -509,12 +510,12 @@ _WHY = {
 }
 
 
-def run_centre_node(settings: CentreSettings, loopback: bool = True) -> str:
+def run_centre_node(settings: CentreSettings, loopback: bool = True, ros_args: Sequence[str] = ()) -> str:
     """Start the centre's node and serve until the exploration ends or a signal (SIGINT, SIGTERM) stops it;
     returns why it ended. ``loopback``: keep DDS on this machine."""
     from mrexplore.ros2.robot_node import start_rclpy
 
-    rclpy = start_rclpy(loopback)
+    rclpy = start_rclpy(loopback, ros_args)
     node = rclpy.create_node("mrexplore_centre")
     why = "interrupted"
     centre: CentreNode | None = None

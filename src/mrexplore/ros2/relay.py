@@ -6,6 +6,7 @@ through the middleware. It forwards each robot's frontier messages from ``/mrexp
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -46,11 +47,13 @@ class LossyRelay:
         out.publish(raw)  # the serialized message as it came
 
 
-def run_relay(deployment: Deployment, loss: float, seed: int, loopback: bool = True) -> str:
+def run_relay(
+    deployment: Deployment, loss: float, seed: int, loopback: bool = True, ros_args: Sequence[str] = ()
+) -> str:
     """Serve until a signal ends the relay; returns what it forwarded and dropped."""
     from mrexplore.ros2.robot_node import serve, start_rclpy
 
-    rclpy = start_rclpy(loopback)
+    rclpy = start_rclpy(loopback, ros_args)
     node = rclpy.create_node("mrexplore_relay")
     relay = serve(rclpy, node, lambda: LossyRelay(node, deployment, loss, seed), f"relay losing {loss:.0%} ready")
     return f"relay forwarded {relay.forwarded} and dropped {relay.dropped} frontier messages"

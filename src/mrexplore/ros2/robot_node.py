@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import importlib.util
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -202,10 +203,13 @@ class RobotNode:
             self._warn(f"reply dropped: kind {values[1]} is neither {ACK} (ack) nor {WHOLE_MAP} (whole map)")
 
 
-def start_rclpy(loopback: bool = True) -> Any:
+def start_rclpy(loopback: bool = True, ros_args: Sequence[str] = ()) -> Any:
     """rclpy, initialised for a node that takes SIGINT and SIGTERM itself (both raise KeyboardInterrupt in
     its bounded spins). ``loopback``: keep DDS on this machine first
-    (:func:`~mrexplore.ros2.loopback.keep_on_loopback`, with the domain already set where it is)."""
+    (:func:`~mrexplore.ros2.loopback.keep_on_loopback`, with the domain already set where it is).
+    ``ros_args``: the command line's ``--ros-args ...`` (remaps, ``-p NAME:=VALUE`` such as
+    ``use_sim_time:=true``, ``--params-file``, ``--log-level``), which rcl applies to the node as to any
+    ROS 2 node."""
     import signal
 
     if loopback:
@@ -220,16 +224,16 @@ def start_rclpy(loopback: bool = True) -> Any:
 
     # The node takes SIGINT and SIGTERM itself: under rclpy's own handlers a SIGTERM left the process
     # hanging in about half the runs of the middleware test under load.
-    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    rclpy.init(args=["mrexplore", *ros_args], signal_handler_options=SignalHandlerOptions.NO)
     signal.signal(signal.SIGTERM, stop)
     signal.signal(signal.SIGINT, stop)
     return rclpy
 
 
-def run_robot_node(settings: RobotNodeSettings, loopback: bool = True) -> None:
+def run_robot_node(settings: RobotNodeSettings, loopback: bool = True, ros_args: Sequence[str] = ()) -> None:
     """Start the robot's node and serve until interrupted (SIGINT or SIGTERM). ``loopback``: keep DDS on this
-    machine."""
-    rclpy = start_rclpy(loopback)
+    machine; ``ros_args``: see :func:`start_rclpy`."""
+    rclpy = start_rclpy(loopback, ros_args)
     node = rclpy.create_node(f"mrexplore_{settings.name}")
     serve(rclpy, node, lambda: RobotNode(node, settings), f"robot {settings.name} ready")
 

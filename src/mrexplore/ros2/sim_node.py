@@ -22,6 +22,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -286,12 +287,12 @@ def _finished(status: dict[str, Any] | None) -> str | None:
     return None if status is None else status.get("finished")
 
 
-def run_sim_node(settings: SimSettings, loopback: bool = True) -> dict[str, Any]:
+def run_sim_node(settings: SimSettings, loopback: bool = True, ros_args: Sequence[str] = ()) -> dict[str, Any]:
     """Run the simulated team until its mission ends (lockstep) or the centre says the exploration finished
     (real time); returns the run's record: the mission's measures and how the middleware did."""
     from mrexplore.ros2.robot_node import start_rclpy
 
-    rclpy = start_rclpy(loopback)
+    rclpy = start_rclpy(loopback, ros_args)
     node = rclpy.create_node("mrexplore_sim")
     try:
         sim_node = SimNode(node, settings)
