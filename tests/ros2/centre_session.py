@@ -179,6 +179,8 @@ def main() -> None:
         future = stop.call_async(Trigger.Request())
         rclpy.spin_until_future_complete(node, future, timeout_sec=10)
         result["stop"] = bool(future.result().success)
+        spin(0.5)
+        result["stop_status"] = statuses[-1]["finished"]  # the last status says why it ended
         node.destroy_node()
         rclpy.shutdown()
         try:

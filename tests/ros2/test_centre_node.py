@@ -40,7 +40,7 @@ def test_the_centre_node_plans_reads_nav2_and_survives_bad_messages() -> None:
     assert result["warnings"][1].startswith("navigation status of robot1 for unknown goal ")
     assert result["warnings"][1].endswith(" dropped")
     assert result["kept_map"] and result["kept_going"]
-    assert result["home"] and result["stop"]
+    assert result["home"] and result["stop"] and result["stop_status"] == "stopped"
     assert result["centre_exit"] == 0
     assert result["centre_said"] == "centre stopped: stopped by /mrexplore/stop"
     assert result["record"] == "stopped"

@@ -447,6 +447,7 @@ class CentreNode:
     def _stop(self) -> tuple[bool, str]:
         self._pause()
         self.finished = "stopped"
+        self._publish_views()  # the status says so at once: a simulator or launcher waiting on it ends
         return True, "stopped: robots hold their positions"
 
     def _return_home(self) -> tuple[bool, str]:
