@@ -49,6 +49,7 @@ def test_real_time_team_finishes_the_map(fault: list[str]) -> None:
     assert run["done_reason"] in ("no_frontiers", "no_reachable_frontiers")
     if fault and fault[0] == "--robot-failure":
         assert run["robots_lost"] == 1
+        assert run["centre"]["lost"] == ["robot2"]  # the centre no longer waits for the killed node
     if fault and fault[0] == "--message-loss":
         assert run["wire"]["messages"] > 0
 

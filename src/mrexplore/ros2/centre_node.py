@@ -157,6 +157,12 @@ class CentreNode:
         self._untaken_since: list[float | None] = [None] * n
         """When each robot's goal was last sent while Nav2 has not taken it (None: taken, or none)."""
         self.goals_resent = 0
+        self._heard_at: list[float | None] = [None] * n
+        """When each robot's last frontier message was taken (None: never; a robot not yet up is waited for
+        until each round's timeout, not declared lost)."""
+        self.lost: set[int] = set()
+        """Robots silent for the deployment's ``lost_after_s``: warned about once, no longer waited for in a
+        round; each rejoins when it speaks again."""
         self._goal_id: list[bytes | None] = [None] * n
         self._known_ids: list[set[bytes]] = [set() for _ in range(n)]
         self._warned_ids: set[bytes] = set()
@@ -231,7 +237,7 @@ class CentreNode:
         now = time.monotonic()
         r = self._round
         if r is not None:
-            complete = r.expected <= set(r.inbox)
+            complete = r.expected - self.lost <= set(r.inbox)
             if complete or (not self.settings.lockstep and now >= r.deadline):
                 self._close()
             elif now >= r.next_ask:
@@ -246,7 +252,20 @@ class CentreNode:
                 self._send_goal(i, goal, again=True)
         if now >= self._next_round:
             self._next_round = now + self.settings.deployment.round_period_s
+            self._mark_lost(now)
             self._open(self.round + 1, (0, 0), set(range(len(self.robots))), None)
+
+    def _mark_lost(self, now: float) -> None:
+        """Robots silent for ``lost_after_s`` are lost: one warning each, and rounds no longer wait for them
+        (they are still asked, and rejoin when they answer)."""
+        after = self.settings.deployment.lost_after_s
+        for i, at in enumerate(self._heard_at):
+            if at is not None and i not in self.lost and now - at > after:
+                self.lost.add(i)
+                self._warn(
+                    f"robot {self.robots[i].name} silent for {now - at:.1f} s: lost, no longer waited for "
+                    "(it rejoins when it speaks again)"
+                )
 
     def _on_request(self, msg: Any) -> None:
         try:
@@ -307,8 +326,12 @@ class CentreNode:
             return
         r.inbox[i] = decoded
         r.last_in = time.monotonic()
+        self._heard_at[i] = r.last_in
+        if i in self.lost:
+            self.lost.discard(i)
+            self.node.get_logger().info(f"robot {name} speaks again: it rejoins the team")
         self._replies[i].publish(self._UInt32MultiArray(data=[r.round, ACK]))
-        if r.expected <= set(r.inbox):
+        if r.expected - self.lost <= set(r.inbox):
             self._close()  # the round is complete: decide now, not at the next tick
 
     def _close(self) -> None:
@@ -380,7 +403,7 @@ class CentreNode:
         free, unknown = int((state == CellState.FREE).sum()), int((state == CellState.UNKNOWN).sum())
         return (
             f"team map: {free:,} free cells, {unknown:,} unknown, {int(un.sum()):,} frontier cells; "
-            f"{heard} of {len(self.robots)} robots heard"
+            f"{heard} of {len(self.robots)} robots heard, {len(self.lost)} lost"
         )
 
     # -- goals and navigation --------------------------------------------------------------------------
@@ -491,6 +514,7 @@ class CentreNode:
             "aborts": planner.aborts,
             "goals_resent": self.goals_resent,
             "paused": self.paused,
+            "lost": [self.robots[i].name for i in sorted(self.lost)],
             "finished": self.finished or planner.done_reason,
         }
 

@@ -241,7 +241,7 @@ def launch_team(
         "lockstep": bool(args.lockstep),
         "map_mismatches": sim_record.get("map_mismatches"),
         "wire": wire_summary(centre["wire"]),
-        "centre": {k: centre.get(k) for k in ("decisions", "aborts", "goals_resent", "warnings", "finished")},
+        "centre": {k: centre.get(k) for k in ("decisions", "aborts", "goals_resent", "warnings", "lost", "finished")},
         "decision_ms_median": _median(centre.get("decision_ms", [])),
         "ros_domain_id": int(os.environ["ROS_DOMAIN_ID"]) if os.environ.get("ROS_DOMAIN_ID", "").isdigit() else None,
         "logs": str(work),
