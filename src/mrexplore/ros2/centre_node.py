@@ -157,12 +157,8 @@ class CentreNode:
         self._untaken_since: list[float | None] = [None] * n
         """When each robot's goal was last sent while Nav2 has not taken it (None: taken, or none)."""
         self.goals_resent = 0
-        self._heard_at: list[float | None] = [None] * n
-        """When each robot's last frontier message was taken (None: never; a robot not yet up is waited for
-        until each round's timeout, not declared lost)."""
-        self.lost: set[int] = set()
-        """Robots silent for the deployment's ``lost_after_s``: warned about once, no longer waited for in a
-        round; each rejoins when it speaks again."""
+        self._heard_at: list[float | None] = [None] * n  # each robot's last message taken (None: never)
+        self.lost: set[int] = set()  # silent for lost_after_s: not waited for (:meth:`_mark_lost`)
         self._goal_id: list[bytes | None] = [None] * n
         self._known_ids: list[set[bytes]] = [set() for _ in range(n)]
         self._warned_ids: set[bytes] = set()
