@@ -16,6 +16,7 @@ Examples
 from __future__ import annotations
 
 import argparse
+import functools
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
@@ -116,12 +117,18 @@ class _Parse:
             raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+@functools.cache
+def _settings() -> dict[str, Setting]:
+    """Every setting of a run, by its dotted path (the defaults')."""
+    return {s.path: s for s in settings_of(RunConfig())}
+
+
 def setting_named(path: str) -> Setting:
     """The setting at a dotted path of the run's settings; one line naming the known ones where none is."""
-    for s in settings_of(RunConfig()):
-        if s.path == path:
-            return s
-    raise MrExploreError(f"no setting {path}; 'mrexplore config' lists them")
+    setting = _settings().get(path)
+    if setting is None:
+        raise MrExploreError(f"no setting {path}; 'mrexplore config' lists them")
+    return setting
 
 
 def _first_sentence(doc: str) -> str:
@@ -165,7 +172,7 @@ def add_settings_flags(
         text = f"{alias.help} {_first_sentence(s.doc)}".strip()
         if s.rule is not None:
             text += f" Allowed: {s.rule.describe()}."
-        text += f" Sets {s.path} (default {s.help().rpartition('Default: ')[2].rstrip('.')})."
+        text += f" Sets {s.path} (default {s.default_text})."
         dest = _DEST + flag
         p.set_defaults(**{_ALIAS + flag: alias})
         if alias.item is not None:
@@ -186,7 +193,7 @@ def _set_value(item: str) -> tuple[str, Any]:
     path = path.strip()
     if not eq or not path:
         raise MrExploreError(f"--set {item!r} must be SECTION.FIELD=VALUE, e.g. --set sim.sensor.range_m=8")
-    setting = next((s for s in settings_of(RunConfig()) if s.path == path), None)
+    setting = _settings().get(path)
     if setting is not None:
         try:
             return path, parse_setting(setting, text)

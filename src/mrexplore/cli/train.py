@@ -80,6 +80,22 @@ def run_train(args: argparse.Namespace) -> str:
     return {"policy": _train_policy, "predictor": _train_predictor}[args.target](args, run)
 
 
+def _run_options(args: argparse.Namespace) -> dict[str, Any]:
+    """What both trainers take from the command line: the run's folder, training maps, budget, workers,
+    resume, seed, progress and where to say what happens."""
+    return {
+        "out": Path(args.out),
+        "train_dir": train_maps(args.train_maps),
+        "minutes": args.minutes,
+        "workers": args.workers,
+        "ray_address": args.ray_address,
+        "resume": args.resume,
+        "seed": args.seed,
+        "progress": args.progress,
+        "say": lambda s: print(s, file=sys.stderr),
+    }
+
+
 def _train_policy(args: argparse.Namespace, run: RunConfig) -> str:
     from mrexplore.global_planning.learned.methods import learned_method
 
@@ -99,19 +115,11 @@ def _train_policy(args: argparse.Namespace, run: RunConfig) -> str:
 
     result = train(
         run.train,
-        Path(args.out),
-        train_maps(args.train_maps),
-        minutes=args.minutes,
         episodes=args.episodes,
-        workers=args.workers,
-        ray_address=args.ray_address,
-        resume=args.resume,
-        seed=args.seed,
-        progress=args.progress,
-        say=lambda s: print(s, file=sys.stderr),
         sim=run.sim,
         mission=run.mission,
         predictor=args.predictor,
+        **_run_options(args),
     )
     best = next(r for r in result.stages if r["stage"] == result.best_stage)
     sampled = f", sampled {best['val_sampled_steps_mean']:.1f}" if best.get("val_sampled_steps_mean") else ""
@@ -137,18 +145,6 @@ def _train_predictor(args: argparse.Namespace, run: RunConfig) -> str:
     say_if_compiling()
     from mrexplore.training.predictor import train_predictor
 
-    path, best = train_predictor(
-        run.predictor,
-        Path(args.out),
-        train_maps(args.train_maps),
-        minutes=args.minutes,
-        workers=args.workers,
-        ray_address=args.ray_address,
-        resume=args.resume,
-        seed=args.seed,
-        progress=args.progress,
-        say=lambda s: print(s, file=sys.stderr),
-        sim=run.sim,
-    )
+    path, best = train_predictor(run.predictor, sim=run.sim, **_run_options(args))
     log = path.parent / "log.csv"
     return f"kept epoch {best['epoch']} (validation loss {best['val_loss']:.4f}); wrote {path} and {log}"

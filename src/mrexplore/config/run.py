@@ -52,6 +52,10 @@ class RuntimeConfig(Checked):
     _env = {"MREXPLORE_THREADS": "threads", "MREXPLORE_MAPS": "maps_dir"}
 
 
+_RUNTIME_VARS = {name: var for var, name in RuntimeConfig._env.items()}
+"""Each runtime setting's environment variable."""
+
+
 def runtime_from_env() -> RuntimeConfig:
     """The runtime settings the environment variables give (each unset one None); one line naming the
     variable where one holds a value its setting refuses.
@@ -75,8 +79,7 @@ def runtime_from_env() -> RuntimeConfig:
 def runtime_value(name: str) -> Any:
     """One runtime setting as its environment variable gives it now (None where unset), checked as
     :func:`runtime_from_env` checks it; cheap enough for every call of the code that reads it."""
-    var = next(v for v, field_name in RuntimeConfig._env.items() if field_name == name)
-    return _parsed_env(name, os.environ.get(var, ""))
+    return _parsed_env(name, os.environ.get(_RUNTIME_VARS[name], ""))
 
 
 @functools.lru_cache(maxsize=64)
@@ -97,9 +100,8 @@ def apply_runtime(runtime: RuntimeConfig) -> None:
     goes to its environment variable, where the code that uses it reads it."""
     for f in fields(runtime):
         value = getattr(runtime, f.name)
-        var = next(v for v, name in runtime._env.items() if name == f.name)
         if value is not None:
-            os.environ[var] = str(value)
+            os.environ[_RUNTIME_VARS[f.name]] = str(value)
 
 
 @dataclass(frozen=True)

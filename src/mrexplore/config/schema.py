@@ -103,6 +103,11 @@ class Checked:
     def _validate(self) -> None:
         """Rules that are more than a field's range (normalising YAML's lists, for one)."""
 
+    @classmethod
+    def env_var(cls, name: str) -> str | None:
+        """The environment variable that may set field ``name``, if any."""
+        return next((var for var, field_name in cls._env.items() if field_name == name), None)
+
 
 _HINTS: dict[type, dict[str, Any]] = {}
 _DOCS: dict[type, dict[str, str]] = {}
@@ -210,14 +215,12 @@ class Setting:
     @property
     def env(self) -> str | None:
         """The environment variable that may set it, if any."""
-        return next((var for var, name in self.owner._env.items() if name == self.name), None)  # type: ignore[attr-defined]
+        return self.owner.env_var(self.name)  # type: ignore[attr-defined]
 
-    def help(self) -> str:
-        """The documentation, the allowed values and the default, in one paragraph (a flag's help)."""
-        text = self.doc
-        if self.rule is not None:
-            text = f"{text} Allowed: {self.rule.describe()}.".strip()
-        return f"{text} Default: {_yaml_scalar(self.default)}.".strip()
+    @property
+    def default_text(self) -> str:
+        """The value as the YAML file writes it (``null``, ``[]``, ``0.05``)."""
+        return _yaml_scalar(self.default)
 
 
 def settings_of(cfg: Any, prefix: str = "") -> Iterator[Setting]:
@@ -344,7 +347,7 @@ def config_yaml(cfg: Any) -> str:
         for f in fields(obj):
             value = getattr(obj, f.name)
             doc = docs.get(f.name, "")
-            env = next((var for var, name in obj._env.items() if name == f.name), None)
+            env = obj.env_var(f.name)
             if env is not None:
                 doc = f"{doc} The environment variable {env} sets it where this file and the flags do not.".strip()
             rule = obj._constraints.get(f.name)

@@ -49,11 +49,9 @@ class NcmScorer(Protocol):
 
     def logits(self, x: NcmInputs) -> NDArray[np.float32]:
         """``(m, n)`` per-robot logits, ``-inf`` where a pair is not allowed."""
-        ...
 
     def draw(self, rows: NDArray[np.float32], seed: int) -> NDArray[np.int64]:
         """``(m,)`` one node per row, drawn from softmax(row) with generator seed ``seed``."""
-        ...
 
 
 NcmSampleHook = Callable[[NcmInputs, NDArray[np.float32], NDArray[np.int64], NDArray[np.int64]], None]

@@ -31,16 +31,18 @@ class HierScorer(Protocol):
     linear edge path, whether its scoring MLP adds nothing, and the learned residual at one decision."""
 
     @property
-    def cfg(self) -> LearnedConfig: ...
+    def cfg(self) -> LearnedConfig:
+        """The network's settings (its inputs and size)."""
 
     @property
-    def edge_weights(self) -> NDArray[np.float64]: ...
+    def edge_weights(self) -> NDArray[np.float64]:
+        """The linear edge path's weights, one per edge feature."""
 
-    def scores_nothing(self) -> bool: ...
+    def scores_nothing(self) -> bool:
+        """Whether the scoring MLP adds nothing (the residual is the linear edge path alone)."""
 
     def residual_of(self, g: GraphInputs) -> NDArray[np.float64]:
         """The learned residual ``(R, C) float64`` at one decision's inputs."""
-        ...
 
 
 SampleHook = Callable[[GraphInputs, NDArray[np.int64], NDArray[np.int64], float], None]
