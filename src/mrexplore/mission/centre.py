@@ -40,9 +40,10 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from mrexplore.pipeline import NO_GOAL, NO_ROUTE, Decision, DecisionInput, ExplorationPipeline
+from mrexplore.pipeline import Decision, DecisionInput, ExplorationPipeline
 from mrexplore.preprocessing.agents import TeamCentre
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap
+from mrexplore.team.goal_book import GoalBook, decision_due
 from mrexplore.types import BoolGrid, CellState, MrExploreError
 
 __all__ = ["TeamPlanner", "NavState", "NO_ORACLE"]
@@ -94,16 +95,11 @@ class TeamPlanner:
         self.blacklist_s, self.replan_s, self.min_replan_s = blacklist_s, replan_s, min_replan_s
         self.settle_s = settle_s
         self._radius = max(1, round(blacklist_radius_m / resolution_m))
-        self.goals = np.tile(NO_GOAL, (n_robots, 1))
-        """``(n_robots, 2) int32`` each robot's goal in the team grid ((-1, -1): none)."""
-        self.routes: list[NDArray[np.int32]] = [NO_ROUTE] * n_robots
-        """Each robot's targets after its goal (the local layer's route)."""
+        self.book = GoalBook(n_robots, shape)
+        """Each robot's goal and route, the blacklist, the areas barred from one robot: the simulator's rules."""
         self.nav = [NavState.IDLE] * n_robots
         self.starts = np.full((n_robots, 2), -1, dtype=np.int32)
         """``(n_robots, 2) int32`` each robot's cell in its first message (its way home)."""
-        self._stood = np.zeros(shape, dtype=bool)
-        self._barred: list[tuple[int, tuple[int, int, int, int], float]] = []
-        """Areas kept from one robot: ``(robot, (r0, r1, c0, c1), until)``."""
         self._last_decision = -np.inf
         self._freed: set[int] = set()
         """Robots whose goal ended since the last decision."""
@@ -139,10 +135,7 @@ class TeamPlanner:
             return
         self.nav[robot] = state
         if state == NavState.ABORTED:
-            r, (g0, g1) = self._radius, (int(goal[0]), int(goal[1]))
-            self._barred.append(
-                (robot, (max(0, g0 - r), g0 + r + 1, max(0, g1 - r), g1 + r + 1), now + self.blacklist_s)
-            )
+            self.book.bar(robot, goal, self._radius, until=now + self.blacklist_s)
             self.aborts += 1
             self._drop(robot)
         elif state == NavState.REACHED:
@@ -150,25 +143,27 @@ class TeamPlanner:
             self._reached.append((robot, goal.copy(), self.team.last_heard[robot]))
             self._drop(robot)
 
+    @property
+    def goals(self) -> NDArray[np.int32]:
+        """``(n_robots, 2) int32`` each robot's goal in the team grid ((-1, -1): none)."""
+        return self.book.goals
+
+    @property
+    def routes(self) -> list[NDArray[np.int32]]:
+        """Each robot's targets after its goal (the local layer's route)."""
+        return self.book.routes
+
     def _drop(self, robot: int) -> None:
         self._freed.add(robot)
-        self.goals[robot] = NO_GOAL
-        self.routes[robot] = NO_ROUTE
+        self.book.drop(robot)
 
     def blacklist(self) -> BoolGrid:
         """``(H, W) bool`` cells that are no candidates for any robot (goals stood on that stayed frontiers)."""
-        return self._stood
+        return self.book.blacklist
 
     def barred(self, robot: int, now: float) -> BoolGrid | None:
         """``(H, W) bool`` cells whose clusters are kept from ``robot`` at ``now`` (None: none)."""
-        self._barred = [b for b in self._barred if b[2] > now]
-        boxes = [box for i, box, _ in self._barred if i == robot]
-        if not boxes:
-            return None
-        mask = np.zeros(self._stood.shape, dtype=bool)
-        for r0, r1, c0, c1 in boxes:
-            mask[r0:r1, c0:c1] = True
-        return mask
+        return self.book.barred(robot, now)
 
     # -- decisions -------------------------------------------------------------------------------------
     def assignable(self, round_: int) -> NDArray[np.int64]:
@@ -212,39 +207,36 @@ class TeamPlanner:
         for robot, goal, heard in self._reached:
             if self.team.last_heard[robot] < heard + 2:  # its next answer may predate the arrival
                 pending.append((robot, goal, heard))
-            elif un_mask[goal[0], goal[1]]:
-                self._stood[goal[0], goal[1]] = True  # stood on it and it stayed a frontier
+            else:
+                self.book.stood_on(goal, still_frontier=bool(un_mask[goal[0], goal[1]]))
         self._reached = pending
         blacklist = self.blacklist()
         barred = [self.barred(int(i), now) for i in active]
         sent: dict[int, NDArray[np.int32]] = {}
-        need = force or now - self._last_decision >= self.replan_s or bool(self._freed & set(map(int, active)))
+        need = decision_due(now, self._last_decision, self.replan_s, force or bool(self._freed & set(map(int, active))))
         settled = now - self._last_decision >= self.min_replan_s
         for i in map(int, active):
             goal = self.goals[i]
             if goal[0] < 0 or un_mask[goal[0], goal[1]] or not settled:
                 continue  # driving on towards a goal already seen costs little; a decision costs the team
-            self._drop(i)  # seen: the next target of its route that still borders unknown space
-            route = self.routes[i]
             mine = barred[list(map(int, active)).index(i)]
-            keep = [
-                k
-                for k, t in enumerate(route)
-                if un_mask[t[0], t[1]] and not blacklist[t[0], t[1]] and (mine is None or not mine[t[0], t[1]])
-            ]
-            if keep:
-                self.goals[i], self.routes[i] = route[keep[0]], route[keep[0] + 1 :]
+
+            def take(t: NDArray[np.int32], mine: BoolGrid | None = mine) -> bool:
+                return bool(
+                    un_mask[t[0], t[1]] and not blacklist[t[0], t[1]] and (mine is None or not mine[t[0], t[1]])
+                )
+
+            # Seen: the next target of its route that still borders unknown space.
+            if self.book.next_target(i, take):
                 self.nav[i] = NavState.SENT
                 sent[i] = self.goals[i].copy()
             else:
+                self._drop(i)
                 need = True
         if not need or len(active) == 0:
             return sent
         self._freed.clear()
-        current = [
-            np.vstack([self.goals[i : i + 1], self.routes[i]]) if self.goals[i, 0] >= 0 else NO_ROUTE
-            for i in map(int, active)
-        ]
+        current = [self.book.current(i) for i in map(int, active)]
         decision = self.strategy.decide(self.decision_input(round_, blacklist, current, self.rng, active, barred))
         self.decision, self._last_decision = decision, now
         self.decisions += 1
@@ -259,7 +251,7 @@ class TeamPlanner:
             goal = decision.goals_rc[j]
             if goal[0] < 0 or np.array_equal(goal, self.goals[i]):
                 continue  # nothing for it, or its goal kept: Nav2 drives on
-            self.goals[i], self.routes[i] = goal.copy(), decision.routes[j][1:]
+            self.book.assign(i, goal.copy(), decision.routes[j][1:])
             self.nav[i] = NavState.SENT
             sent[i] = goal.copy()
         return sent

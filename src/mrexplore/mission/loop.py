@@ -46,7 +46,8 @@ from mrexplore.sim.belief import classify
 from mrexplore.sim.measures import EpisodeMeasures, lower_bound_steps
 from mrexplore.sim.starts import draw_starts
 from mrexplore.sim.world import ExplorationSim, StepResult
-from mrexplore.types import CellState, MrExploreError
+from mrexplore.team.goal_book import GoalBook
+from mrexplore.types import BoolGrid, CellState, MrExploreError
 
 __all__ = [
     "Mission",
@@ -241,8 +242,8 @@ class Mission:
         strategy.prepare(truth, starts, sim_cfg)
         self.sim = sim = ExplorationSim(truth, starts, sim_cfg, rng)
         n = sim.n_robots
-        self.goals = np.tile(NO_GOAL, (n, 1))
-        self.blacklist = np.zeros(truth.shape, dtype=bool)
+        self.book = GoalBook(n, truth.shape)
+        """Each robot's goal and route, and the team's blacklist: the rules the real team's centre keeps too."""
         self.record = MeasuresRecorder([sim.coverage])
         self.last_decision_step = -mission_cfg.replan_every_steps
         self.decision: Decision | None = None
@@ -282,7 +283,6 @@ class Mission:
         self.done_reason: str | None = None
         self._bar = Progress(100, f"{strategy.name} {truth.name}", "%", progress, leave=False)
         self.blocked = np.zeros(n, dtype=bool)
-        self.routes = [NO_ROUTE] * n  # targets after the current goal
         self.passable = self.state == CellState.FREE
         self.reward_since_decision = 0.0
         """Paper eq. 9 summed over the simulation steps since the last decision: R_time per step plus
@@ -318,22 +318,37 @@ class Mission:
         self.__dict__.update(copy.deepcopy(snap.state))
 
     # -- the loop ---------------------------------------------------------------------------------------
+    @property
+    def goals(self) -> NDArray[np.int32]:
+        """``(n_robots, 2) int32`` each robot's goal ((-1, -1): none)."""
+        return self.book.goals
+
+    @property
+    def routes(self) -> list[NDArray[np.int32]]:
+        """Each robot's targets after its goal."""
+        return self.book.routes
+
+    @property
+    def blacklist(self) -> BoolGrid:
+        """``(H, W) bool`` cells no robot is sent to again."""
+        return self.book.blacklist
+
     def _advance_route(self, i: int) -> bool:
-        """Move robot i on to the next target of its route; False when the route is used up."""
-        routes, sim = self.routes, self.sim
-        while len(routes[i]):
-            target, routes[i] = routes[i][0], routes[i][1:]
+        """Move robot i on to the next target of its route it can drive to; False when the route is used up."""
+        sim = self.sim
+
+        def take(target: NDArray[np.int32]) -> bool:
             if self.strategy.goals_are_frontiers and (
                 self.blacklist[target[0], target[1]] or not _goal_still_frontier(sim.team_observed, target)
             ):
-                continue
+                return False
             path = astar_path(self.passable, tuple(sim.positions_rc[i]), tuple(target))
             if len(path):
-                self.goals[i] = target
                 sim.set_path(i, path)
                 self._set_due(i, path)
-                return True
-        return False
+            return bool(len(path))
+
+        return self.book.next_target(i, take)
 
     def _needs_decision(self) -> bool:
         """The replanning events (module docstring); moves robots on along their routes on the way."""
@@ -361,7 +376,7 @@ class Mission:
                 and np.array_equal(sim.positions_rc[i], goals[i])
                 and _goal_still_frontier(sim.team_observed, goals[i])
             ):
-                self.blacklist[goals[i, 0], goals[i, 1]] = True  # stood on it and it stayed a frontier
+                self.book.stood_on(goals[i], still_frontier=True)
             if self.blocked[i] or sim.path_ahead_blocked(i):
                 self._release(i)
                 need = True
@@ -388,16 +403,16 @@ class Mission:
         """The watchdog: robot i gained nothing long after it should have reached its goal; the goal's
         neighbourhood stops being a candidate and the robot waits for the next decision."""
         self._blacklist_around(self.goals[i])
-        self.goals[i] = NO_GOAL
-        self.routes[i] = NO_ROUTE
+        self.book.drop(i)
         self.sim.set_path(i, NO_ROUTE)
         self._release(i)
         self.stalls += 1
 
     def _blacklist_around(self, goal: NDArray[np.int32]) -> None:
         """The cells within ``oscillation_radius_m`` / 4 of ``goal`` stop being candidates."""
-        r = max(1, round(self.mission_cfg.oscillation_radius_m / 4 / self.truth.resolution_m))
-        self.blacklist[max(0, goal[0] - r) : goal[0] + r + 1, max(0, goal[1] - r) : goal[1] + r + 1] = True
+        self.book.blacklist_around(
+            goal, max(1, round(self.mission_cfg.oscillation_radius_m / 4 / self.truth.resolution_m))
+        )
 
     def _keeps_goal(self, i: int, goal: NDArray[np.int32]) -> bool:
         """Whether robot i keeps its current goal instead of ``goal`` (oscillation breaking): it does when
@@ -437,7 +452,7 @@ class Mission:
         sim = self.sim
         belief, here = sim.beliefs[i], sim.positions_rc[i]
         if self.strategy.goals_are_frontiers and _goal_still_frontier(sim.team_observed, here):
-            self.blacklist[here[0], here[1]] = True  # stood on its goal and it stayed a frontier
+            self.book.stood_on(here, still_frontier=True)
         window = belief.window(1)
         origin = np.array([window[0].start, window[1].start], dtype=np.int32)
         own = classify(belief.log_odds[window], belief.observed[window], self.sim_cfg.sensor)
@@ -519,7 +534,7 @@ class Mission:
         sim, link = self.sim, self.link
         for _ in range(self.faults.restarts_due(sim.steps)):
             link.restart_centre()
-            self.blacklist = np.zeros(self.truth.shape, dtype=bool)  # the centre's memory too
+            self.book.forget()  # the centre's memory too
         with timed(self.strategy.timer, "round"):
             self.state = link.exchange(sim.beliefs, sim.positions_rc, self.sending())
         self.record.onboard_ms.extend(link.robot_ms_each)

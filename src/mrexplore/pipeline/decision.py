@@ -16,6 +16,7 @@ from mrexplore.paths.distance_field import Field
 from mrexplore.paths.far_field import CoarseGrid, NearFarField, far_fields
 from mrexplore.preprocessing.clustering import Clusters
 from mrexplore.preprocessing.frontiers import Frontiers
+from mrexplore.team.goal_book import NO_GOAL, NO_ROUTE  # the goal book owns them; re-exported here
 from mrexplore.types import BoolGrid, StateGrid
 
 __all__ = [
@@ -31,10 +32,6 @@ __all__ = [
     "PosedDecision",
 ]
 
-NO_GOAL = np.array([-1, -1], dtype=np.int32)
-"""``(2,) int32`` the goal cell of a robot without one."""
-NO_ROUTE = np.zeros((0, 2), dtype=np.int32)
-"""``(0, 2) int32`` an empty route or path."""
 
 RobotField = Field | NearFarField
 """A robot's distances at a decision: exact (:class:`Field`), or exact near it and estimated far away on a

@@ -23,6 +23,7 @@ from mrexplore.preprocessing.transmission import (
 )
 from mrexplore.runtime.threads import map_threads
 from mrexplore.sim.belief import Belief
+from mrexplore.team.rounds import Reply, RoundCollector
 from mrexplore.types import CellState, StateGrid
 
 __all__ = ["TeamLink"]
@@ -71,6 +72,9 @@ class TeamLink:
         self._rng = rng if rng is not None else np.random.default_rng(0)
         self.team = TeamCentre(n_robots, shape, preprocess.closing_size_cells, silence_rounds)
         """The centre's receiving end."""
+        self.rounds = RoundCollector(n_robots, timeout=1, ask_again=1, lost_after=silence_rounds)
+        """The centre's side of each round, on a clock in rounds (a round here closes once every robot had
+        its turn, as the ROS 2 centre's does on a clock in seconds)."""
         self.totals = TransmissionTotals(grids_counted=count_grids, mode=mode)
         self.robots = [RobotAgent(i, shape, preprocess, sensor) for i in range(n_robots)]
         """Each robot's on-board work: its grid kept up to date where its scans fell, its messages."""
@@ -97,6 +101,7 @@ class TeamLink:
     def restart_centre(self) -> None:
         """The centre loses everything it held: the robots' maps and bases, their cells, whom it heard."""
         self.team.restart(self.totals.rounds)
+        self.rounds = RoundCollector(len(self.robots), timeout=1, ask_again=1, lost_after=self.silence_rounds)
         self.totals.centre_restarts += 1
 
     def _lost(self) -> bool:
@@ -116,8 +121,9 @@ class TeamLink:
         lacks the delta's base, and the acknowledgement back."""
         if not self._send(data):
             return
-        received = self.team.read(data)
-        if received is None:
+        rounds, r = self.rounds, self.totals.rounds
+        rounds.admit(i, r, is_delta=self.mode == "delta")  # the robot's first answer: new
+        if rounds.take(i, self.team.read(data), now=r) is Reply.WHOLE_MAP:
             if self._lost():  # the centre's request for the whole map
                 self.totals.acks_lost += 1
                 return
@@ -126,13 +132,13 @@ class TeamLink:
             self.totals.bytes_resent += len(full)
             if not self._send(full):
                 return
-            received = self.team.read(full)
-            assert received is not None  # a whole map needs no base
-        self.team.receive(received, self.totals.rounds)
+            rounds.admit(i, r, is_delta=False)  # the whole map asked for
+            reply = rounds.take(i, self.team.read(full), now=r)
+            assert reply is Reply.ACK  # a whole map needs no base
         if self._lost():
             self.totals.acks_lost += 1
         else:
-            self.robots[i].acknowledged(received)
+            self.robots[i].acknowledged(rounds.current.inbox[i])  # type: ignore[union-attr]
 
     def exchange(
         self,
@@ -143,6 +149,7 @@ class TeamLink:
         """Run one round: every robot that can (``sending``, default all) sends, the centre rebuilds;
         returns the centre's ``(H, W) uint8`` grid and updates :attr:`status`."""
         r = self.totals.rounds
+        self.rounds.open(r, set(range(len(beliefs))) if sending is None else set(map(int, np.flatnonzero(sending))), r)
         robot_s = accounting_s = 0.0
         self.robot_ms_each = []
         to_count: list[tuple[int, tuple[int, tuple[slice, slice]], StateGrid]] = []
@@ -202,6 +209,8 @@ class TeamLink:
             self.totals.bytes_grid += raw
             self.totals.bytes_grid_zlib += packed
         accounting_s += time.perf_counter() - t0
+        for message in self.rounds.close().values():  # in robot order
+            self.team.receive(message, r)
         state = self.team.state()
         t0 = time.perf_counter()
         self.totals.iou.append(free_iou(state == CellState.FREE, self._free_count > 0))

@@ -50,9 +50,12 @@ from mrexplore.maps.frame import GridFrame
 from mrexplore.maps.occupancy_grid import FrameOffset
 from mrexplore.types import MrExploreError
 
-__all__ = ["Deployment", "RobotEntry", "TeamGrid", "read_deployment", "POSE_TYPES"]
+__all__ = ["Deployment", "RobotEntry", "TeamGrid", "read_deployment", "POSE_TYPES", "GOAL_VIA"]
 
 POSE_TYPES = ("pose_with_covariance", "odometry", "tf")
+GOAL_VIA = ("auto", "action", "topic")
+"""How goals reach a robot's Nav2: its NavigateToPose action, its ``goal_pose`` topic, or ``auto`` (the action
+where nav2_msgs imports)."""
 """How a robot's pose is read: PoseWithCovarianceStamped (AMCL, slam_toolbox), nav_msgs/Odometry, or a tf2 lookup
 of ``base_frame`` in ``frame`` (needs tf2_ros from a sourced ROS 2 installation; untested here)."""
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
@@ -114,8 +117,15 @@ class RobotEntry(Checked):
     frontiers_topic: str = ""
     """Where the robot's sparse frontier messages are read (default ``/mrexplore/NAME/frontiers``, where its
     node publishes them; a relay in between republishes them elsewhere)."""
+    goal_via: str = "auto"
+    """How goals reach its Nav2: ``action`` (NavigateToPose, on the action named by ``nav_status_topic`` less
+    ``/_action/status``), ``topic`` (``goal_topic``), ``auto`` (the action where nav2_msgs imports)."""
+    tf_topic: str = ""
+    """Where ``pose_type: tf`` reads transforms (default ``/NAME/tf``, as nav2_bringup remaps each robot's)."""
+    tf_static_topic: str = ""
+    """Where ``pose_type: tf`` reads static transforms (default ``/NAME/tf_static``)."""
 
-    _constraints = {"index": at_least(0), "pose_type": OneOf(POSE_TYPES)}
+    _constraints = {"index": at_least(0), "pose_type": OneOf(POSE_TYPES), "goal_via": OneOf(GOAL_VIA)}
 
     def _validate(self) -> None:
         require(
@@ -127,6 +137,8 @@ class RobotEntry(Checked):
             "pose_topic": f"/{self.name}/pose",
             "goal_topic": f"/{self.name}/goal_pose",
             "nav_status_topic": f"/{self.name}/navigate_to_pose/_action/status",
+            "tf_topic": f"/{self.name}/tf",
+            "tf_static_topic": f"/{self.name}/tf_static",
         }
         for key, value in defaults.items():
             if not getattr(self, key):
@@ -209,6 +221,7 @@ class Deployment(Checked):
                 "goal_topic": r.goal_topic,
                 "nav_status_topic": r.nav_status_topic,
                 "frontiers_topic": r.frontiers_topic,
+                **{k: getattr(r, k) for k in ("goal_via", "tf_topic", "tf_static_topic")},
             }
             for r in self.robots
         ]

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,12 +29,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrexplore.global_planning.protocol import Assignment
+from mrexplore.mission.centre import TeamPlanner
 from mrexplore.pipeline.decision import Decision
 from mrexplore.preprocessing.clustering import Clusters
 from mrexplore.preprocessing.frontiers import Frontiers
 from mrexplore.types import MrExploreError, StateGrid
 
-__all__ = ["DecisionRequest", "DecisionReply", "state_digest"]
+__all__ = ["DecisionRequest", "DecisionReply", "state_digest", "decide_lockstep"]
 
 
 def _cells(rows: Any) -> NDArray[np.int32]:
@@ -208,3 +210,25 @@ class DecisionReply:
             )
         except (KeyError, TypeError, ValueError, IndexError) as exc:
             raise MrExploreError(f"decision reply lacks or mistypes a field ({exc})") from None
+
+
+def decide_lockstep(planner: TeamPlanner, request: DecisionRequest) -> tuple[Decision, DecisionReply, list[int]]:
+    """The centre's decision on the simulator's ``request``, taken by ``planner`` on the maps it holds, with
+    the simulator's generator state and reports: the decision, the reply for the simulator, and the robots
+    the centre would assign to (the simulator's ``active`` where both heard the same robots)."""
+    t0 = time.perf_counter()
+    active = np.asarray(request.active, dtype=np.int64)
+    mine = planner.assignable(request.round).tolist()
+    blacklist = np.zeros(planner.team.map.shape, dtype=bool)
+    blacklist.flat[request.blacklist] = True
+    rng = np.random.default_rng()
+    rng.bit_generator.state = request.rng
+    decision = planner.strategy.decide(planner.decision_input(request.round, blacklist, request.current, rng, active))
+    planner.decision = decision
+    planner.decisions += 1
+    for j, i in enumerate(map(int, active)):
+        planner.book.assign(i, decision.goals_rc[j], decision.routes[j][1:])
+    if decision.done_reason is not None:
+        planner.done_reason = decision.done_reason
+    ms = (time.perf_counter() - t0) * 1e3
+    return decision, DecisionReply.of(request.round, request.active, decision, rng.bit_generator.state, ms), mine
