@@ -10,7 +10,13 @@ import pytest
 
 from mrexplore.config import GridThresholds
 from mrexplore.maps.frame import GridFrame
-from mrexplore.maps.occupancy_grid import FrameOffset, OccupancyGridData, checked_values, state_in_team_frame
+from mrexplore.maps.occupancy_grid import (
+    FrameOffset,
+    OccupancyGridData,
+    checked_values,
+    grid_in_robot_frame,
+    state_in_team_frame,
+)
 from mrexplore.types import MrExploreError
 
 F, X, U = 0, 1, 2  # CellState: free, occupied (X), unknown
@@ -141,3 +147,18 @@ def test_an_aligned_map_of_the_team_s_cell_size_maps_one_to_one() -> None:
     got = state_in_team_frame(_msg(values, res=0.1, origin=(0.3, -0.2, 0.0)), FrameOffset(), team, TH)
     want = np.array([[{-1: U, 0: F, 100: X}[v] for v in row] for row in values[::-1]])
     assert (got == want).all()
+
+
+@pytest.mark.parametrize("yaw", [0.0, math.pi / 2, math.pi, -math.pi / 2])
+@pytest.mark.parametrize("fine", [0.05, 0.1])
+def test_a_slam_map_published_in_a_robots_turned_frame_reads_back_to_the_same_team_grid(
+    yaw: float, fine: float
+) -> None:
+    # The Nav2 double publishes each robot's map in its own frame (turned by a quarter turn, finer cells);
+    # the robot node reads it back cell for cell, every one-cell wall kept.
+    rng = np.random.default_rng(3)
+    state = rng.choice(np.array([0, 1, 2], np.uint8), size=(9, 7))
+    team = GridFrame(height=9, width=7, resolution_m=0.1, origin_xy=(-0.3, 0.2))
+    offset = FrameOffset(0.4, -0.25, yaw)
+    published = grid_in_robot_frame(state, team, offset, fine)
+    assert np.array_equal(state_in_team_frame(published, offset, team, GridThresholds()), state)

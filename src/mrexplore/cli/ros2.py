@@ -62,6 +62,25 @@ def _add_team_flags(p: argparse.ArgumentParser, robots: bool = True) -> None:
     add_settings_flags(p)
 
 
+def _add_nav2_flags(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--nav2",
+        action="store_true",
+        help="stand in for Nav2 and SLAM as they behave: a map frame per robot, SLAM maps at --slam-resolution, "
+        "sim time on /clock (docs/ros2.md)",
+    )
+    p.add_argument(
+        "--slam-resolution", type=POSITIVE, default=0.05, metavar="M", help="with --nav2: SLAM map cells, metres"
+    )
+    p.add_argument(
+        "--clock-rate",
+        type=POSITIVE,
+        default=1.0,
+        metavar="R",
+        help="with --nav2: sim time runs R times the wall clock (default 1)",
+    )
+
+
 def add_ros2(sub: Any) -> None:
     rp = sub.add_parser(
         "ros2",
@@ -113,6 +132,7 @@ def add_ros2(sub: Any) -> None:
         "--progress-file", default=None, metavar="FILE", help="keep the step and coverage here (JSON), for a launcher"
     )
     si.add_argument("--network", action="store_true", help="use the system's DDS settings (default: loopback)")
+    _add_nav2_flags(si)
     rl = kinds.add_parser("relay", help="a lossy link between robots and centre, to try the protocol under loss")
     rl.add_argument("--loss", type=LOSS, required=True, metavar="P", help="share of frontier messages dropped")
     rl.add_argument("--seed", type=SEED, default=0, help="seed of the drops (default 0)")
@@ -128,6 +148,7 @@ def add_ros2(sub: Any) -> None:
         "--json", action="store_true", help="print explore's record plus the bytes measured on the wire, as JSON"
     )
     la.add_argument("--network", action="store_true", help="use the system's DDS settings (default: loopback)")
+    _add_nav2_flags(la)
 
 
 def _deployment(args: argparse.Namespace, run: RunConfig) -> tuple[Any, Any]:
@@ -210,11 +231,21 @@ def _ros2_sim(args: argparse.Namespace, argv: list[str]) -> str:
     )
     names = [f"robot{i + 1}" for i in range(run.sim.robots)]
     dep = Deployment.of_names(names, grid)
+    if args.nav2:
+        dep = _nav2_deployment(spec, dep)
     if args.ros2 == "sim":
+        from mrexplore.ros2.nav2_double import DoubleSettings
         from mrexplore.ros2.sim_node import SimSettings, run_sim_node
 
         progress_file = Path(args.progress_file) if args.progress_file else None
-        sim_settings = SimSettings(spec, dep, args.lockstep, args.speed, progress_file=progress_file)
+        double, rate = DoubleSettings(), None
+        if args.nav2:
+            offsets = tuple(r.offset for r in dep.robots)
+            double = DoubleSettings(args.slam_resolution, offsets, _DRIFT_M_PER_S, map_period_s=_SLAM_MAP_PERIOD_S)
+            rate = args.clock_rate
+        sim_settings = SimSettings(
+            spec, dep, args.lockstep, args.speed, progress_file=progress_file, double=double, clock_rate=rate
+        )
         record = run_sim_node(sim_settings, loopback=not args.network, ros_args=args.ros_args)
         if args.json:
             print(json.dumps(strict_json(record), allow_nan=False))
@@ -227,3 +258,26 @@ def _ros2_sim(args: argparse.Namespace, argv: list[str]) -> str:
     if args.json:
         print(json.dumps(strict_json(full), allow_nan=False))
     return "launch ended" if args.json else launch_summary(full)
+
+
+_DRIFT_M_PER_S = 0.01
+"""How fast the double's odometry drifts from its map pose under ``--nav2``."""
+_SLAM_MAP_PERIOD_S = 1.0
+"""The double's SLAM publishes each map this often under ``--nav2`` (slam_toolbox's ``map_update_interval``
+as docs/ros2.md's recipe sets it; its default is 5 s)."""
+
+
+def _nav2_deployment(spec: Any, dep: Any) -> Any:
+    """The team as Nav2 robots bring it: each robot's map frame where it started (slam_toolbox starts its map
+    at the robot's first pose), turned a quarter turn more than the last robot's."""
+    import math
+
+    from mrexplore.mission import Mission
+    from mrexplore.ros2.deployment import Deployment
+
+    starts = Mission(spec, progress=False).starts_rc  # the mission's own draw, as the simulator makes it
+    robots = []
+    for i, r in enumerate(dep.robots):
+        x, y = spec.truth.frame.rc_to_xy((int(starts[i, 0]), int(starts[i, 1])))
+        robots.append({"name": r.name, "offset": [float(x), float(y), (i % 4) * math.pi / 2]})
+    return Deployment.from_dict({**dep.to_dict(), "robots": robots})

@@ -35,6 +35,7 @@ __all__ = [
     "checked_values",
     "state_in_team_frame",
     "occupancy_values",
+    "grid_in_robot_frame",
     "yaw_of",
     "OCCUPANCY_VALUES",
 ]
@@ -218,6 +219,37 @@ def occupancy_values(state: StateGrid) -> NDArray[np.int8]:
     [0, 100, -1, 0]
     """
     return OCCUPANCY_VALUES[state[::-1]].ravel()
+
+
+def grid_in_robot_frame(
+    state: StateGrid, team: GridFrame, offset: FrameOffset, resolution_m: float
+) -> OccupancyGridData:
+    """A team-frame grid as a SLAM node would publish it in a robot's own map frame (axis-aligned there,
+    ``resolution_m`` cells covering the whole team grid): each cell takes the state of the team cell under its
+    centre. What a simulated robot's SLAM publishes; :func:`state_in_team_frame` reads it back.
+
+    Examples
+    --------
+    >>> team = GridFrame(height=1, width=2, resolution_m=1.0)
+    >>> g = grid_in_robot_frame(np.array([[0, 1]], np.uint8), team, FrameOffset(), 0.5)
+    >>> (g.width, g.height, g.origin_xyyaw), [int(v) for v in g.data]  # each team cell: 2 x 2 of 0.5 m
+    ((4, 2, (0.0, 0.0, 0.0)), [0, 0, 100, 100, 0, 0, 100, 100])
+    """
+    x0, y0 = team.origin_xy
+    x1, y1 = x0 + team.width * team.resolution_m, y0 + team.height * team.resolution_m
+    cx, cy = offset.to_robot(np.array([x0, x1, x0, x1]), np.array([y0, y0, y1, y1]))
+    lo_x, lo_y = float(cx.min()), float(cy.min())
+    nx = max(1, math.ceil(round((float(cx.max()) - lo_x) / resolution_m, 6)))
+    ny = max(1, math.ceil(round((float(cy.max()) - lo_y) / resolution_m, 6)))
+    xs = lo_x + (np.arange(nx) + 0.5) * resolution_m
+    ys = lo_y + (np.arange(ny) + 0.5) * resolution_m
+    gx, gy = offset.to_team(*np.meshgrid(xs, ys))  # (ny, nx), rows along +y
+    c = np.floor((gx - x0) / team.resolution_m).astype(np.int64)
+    r = team.height - 1 - np.floor((gy - y0) / team.resolution_m).astype(np.int64)
+    inside = (r >= 0) & (r < team.height) & (c >= 0) & (c < team.width)
+    values = np.full((ny, nx), -1, dtype=np.int8)
+    values[inside] = OCCUPANCY_VALUES[state[r[inside], c[inside]]]
+    return OccupancyGridData(nx, ny, resolution_m, (lo_x, lo_y, 0.0), values.ravel())
 
 
 def yaw_of(qx: float, qy: float, qz: float, qw: float) -> float:

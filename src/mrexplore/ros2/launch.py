@@ -195,6 +195,9 @@ def launch_team(
     for flag in ("no_local", "lockstep", "direct_maps"):
         if getattr(args, flag):
             centre_cmd.append("--" + flag.replace("_", "-"))
+    # Under --nav2 every node of the team runs on the double's sim time, as on a simulated Nav2 team.
+    ros_args = ["--ros-args", "-p", "use_sim_time:=true"] if getattr(args, "nav2", False) else []
+    centre_cmd += ros_args
     team = TeamProcesses(work)
 
     def stop(signum: int, frame: object) -> None:
@@ -207,7 +210,8 @@ def launch_team(
         team.start("centre", centre_cmd)
         if not args.direct_maps:
             for name in names:
-                team.start(name, [*me, "ros2", "robot", "--name", name, "--deployment", str(robots_file)] + net)
+                robot_cmd = [*me, "ros2", "robot", "--name", name, "--deployment", str(robots_file), *net]
+                team.start(name, robot_cmd + ros_args)
         if loss > 0:
             relay = [*me, "ros2", "relay", "--deployment", str(robots_file), "--loss", str(loss)]
             team.start("relay", relay + ["--seed", str(args.seed), *net])
@@ -234,14 +238,20 @@ def launch_team(
     if not record_file.is_file():
         raise MrExploreError(f"the centre wrote no record; its log is {work / 'centre.log'}")
     centre = json.loads(record_file.read_text())
+    double = ("goals_received", "aborts_caused", "preempted", "sim_seconds")
     return {
-        "measures": {k: v for k, v in sim_record.items() if k not in ("starts_rc", "map_mismatches")},
+        "measures": {k: v for k, v in sim_record.items() if k not in ("starts_rc", "map_mismatches", *double)},
         "starts_rc": sim_record.get("starts_rc", []),
         "transport": "ros2",
         "lockstep": bool(args.lockstep),
         "map_mismatches": sim_record.get("map_mismatches"),
         "wire": wire_summary(centre["wire"]),
         "centre": {k: centre.get(k) for k in ("decisions", "aborts", "goals_resent", "warnings", "lost", "finished")},
+        "goals_sent": centre.get("goals_sent"),
+        "goals_resent": centre.get("goals_resent"),
+        "aborts_read": centre.get("aborts"),
+        "robots_lost": len(centre.get("lost") or []),
+        "nav2_double": {k: sim_record.get(k) for k in double} if not args.lockstep else None,
         "decision_ms_median": _median(centre.get("decision_ms", [])),
         "ros_domain_id": int(os.environ["ROS_DOMAIN_ID"]) if os.environ.get("ROS_DOMAIN_ID", "").isdigit() else None,
         "logs": str(work),

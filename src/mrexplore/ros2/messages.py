@@ -17,7 +17,7 @@ from mrexplore.types import StateGrid
 
 if TYPE_CHECKING:  # the message packages come with the ros2 extra; imported where a message is built
     from geometry_msgs.msg import Pose, PoseStamped, PoseWithCovarianceStamped
-    from nav_msgs.msg import OccupancyGrid
+    from nav_msgs.msg import OccupancyGrid, Odometry
     from std_msgs.msg import UInt8MultiArray
     from visualization_msgs.msg import MarkerArray
 
@@ -27,6 +27,8 @@ __all__ = [
     "bytes_message",
     "message_bytes",
     "team_map_message",
+    "grid_message",
+    "odometry_message",
     "goal_message",
     "pose_message",
     "markers_message",
@@ -86,6 +88,31 @@ def team_map_message(state: StateGrid, frame: GridFrame, frame_id: str) -> Occup
     msg.info.origin.position.x, msg.info.origin.position.y = float(frame.origin_xy[0]), float(frame.origin_xy[1])
     msg.info.origin.orientation.w = 1.0
     msg.data = array.array("b", occupancy_values(state).tobytes())
+    return msg
+
+
+def grid_message(grid: OccupancyGridData, frame_id: str, stamp: Any) -> OccupancyGrid:
+    """A nav_msgs/OccupancyGrid of ``grid`` in ``frame_id`` (the inverse of :func:`grid_data`)."""
+    from nav_msgs.msg import OccupancyGrid
+
+    msg = OccupancyGrid()
+    msg.header.frame_id, msg.header.stamp = frame_id, stamp
+    msg.info.width, msg.info.height, msg.info.resolution = int(grid.width), int(grid.height), float(grid.resolution_m)
+    x, y, yaw = grid.origin_xyyaw
+    msg.info.origin.position.x, msg.info.origin.position.y = float(x), float(y)
+    msg.info.origin.orientation.z, msg.info.origin.orientation.w = _quaternion(yaw)
+    msg.data = array.array("b", np.asarray(grid.data, dtype=np.int8).tobytes())
+    return msg
+
+
+def odometry_message(x: float, y: float, frame_id: str, stamp: Any) -> Odometry:
+    """A nav_msgs/Odometry at ``(x, y)`` in ``frame_id`` (``odom``), as a robot's base driver publishes it."""
+    from nav_msgs.msg import Odometry
+
+    msg = Odometry()
+    msg.header.frame_id, msg.header.stamp, msg.child_frame_id = frame_id, stamp, "base_link"
+    msg.pose.pose.position.x, msg.pose.pose.position.y = x, y
+    msg.pose.pose.orientation.w = 1.0
     return msg
 
 
