@@ -71,6 +71,7 @@ def main() -> None:
         def publish_world(state: np.ndarray) -> None:
             map_pub.publish(team_map_message(state, TEAM, "map"))
             pose = PoseWithCovarianceStamped()
+            pose.header.frame_id = "map"
             pose.pose.pose.position.x, pose.pose.pose.position.y = 0.25, 0.45  # cell (3, 2)
             pose.pose.pose.orientation.w = 1.0
             pose_pub.publish(pose)
@@ -130,10 +131,18 @@ def main() -> None:
         map_pub.publish(bad)
         spin(0.3)
         lost = PoseWithCovarianceStamped()
+        lost.header.frame_id = "map"
         lost.pose.pose.position.x = float("nan")
         lost.pose.pose.orientation.w = 1.0
         pose_pub.publish(lost)
-        spin(0.5)
+        spin(0.3)
+        drifting = PoseWithCovarianceStamped()  # odometry's frame: it drifts from the map's
+        drifting.header.frame_id = "odom"
+        drifting.pose.pose.position.x, drifting.pose.pose.orientation.w = 0.65, 1.0
+        for _ in range(3):  # many times a second, one warning
+            pose_pub.publish(drifting)
+            spin(0.1)
+        spin(0.3)
         fourth = centre.read(ask(3, room(6)))  # the bad map and pose dropped: the robot still holds room(6)
         kinds.append(("after_bad_map", fourth is not None and fourth.is_delta and centre.accepts(fourth)))
         centre.receive(fourth, 3)

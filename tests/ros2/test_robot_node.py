@@ -1,6 +1,6 @@
 """``mrexplore ros2 robot`` in a process of its own, driven through the middleware on loopback by a test
 centre: whole map, delta, a refused delta after a centre restart and the whole map resent, and a malformed
-map and a pose of NaN dropped with one warning each while the node keeps what it had."""
+map, a pose of NaN and a pose in the odometry frame dropped with one warning each while the node keeps what it had."""
 
 from __future__ import annotations
 
@@ -38,6 +38,8 @@ def test_the_robot_node_speaks_the_protocol_and_survives_a_bad_map() -> None:
         "publish a map of the area explored",
         "map dropped: occupancy grid origin must be finite x, y and yaw, got (nan, 0.0, 0.0)",
         "pose dropped: position (nan, 0.0) and heading 0.0 must be finite",
+        "pose dropped: /robot1/pose is in frame 'odom', the map in 'map'; give a pose in the map frame "
+        "(AMCL's amcl_pose, slam_toolbox's pose) or pose_type tf",
     ]
     assert len(warnings) == len(expected)  # one line each, dropped; the node kept what it had (steps above)
     for line, text in zip(warnings, expected, strict=True):

@@ -100,6 +100,7 @@ def number(low: float, rule: str, *, integer: bool = False, below: float | None 
 
 
 POSITIVE = number(1e-300, "a number > 0")
+NON_NEGATIVE = number(0, "a number >= 0")
 SEED = number(0, "an integer >= 0", integer=True)
 COUNT = number(1, "an integer >= 1", integer=True)
 WORKERS = number(0, "an integer >= 0 (0: one per core)", integer=True)

@@ -12,6 +12,7 @@ from typing import Any
 from mrexplore.cli.common import (
     DEFAULT_STRATEGY,
     LOSS,
+    NON_NEGATIVE,
     POLICY_HELP,
     POSITIVE,
     PREDICTOR_HELP,
@@ -71,6 +72,13 @@ def _add_nav2_flags(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--slam-resolution", type=POSITIVE, default=0.05, metavar="M", help="with --nav2: SLAM map cells, metres"
+    )
+    p.add_argument(
+        "--inscribed-radius",
+        type=NON_NEGATIVE,
+        default=0.1,
+        metavar="M",
+        help="with --nav2: goals this close to an obstacle are aborted, as Nav2's planners refuse them (default 0.1)",
     )
     p.add_argument(
         "--clock-rate",
@@ -197,7 +205,9 @@ def run_ros2(args: argparse.Namespace, argv: list[str]) -> str:
             raise MrExploreError("give the robot's place in the team: --index N, or a --deployment that names it")
         offset = FrameOffset(*args.offset) if args.offset else (entry.offset if entry else FrameOffset())
         pose_type = args.pose_type or (entry.pose_type if entry else "pose_with_covariance")
-        robot = RobotNodeSettings(args.name, index, team, offset, pose_type, run.preprocess, entry=entry)
+        robot = RobotNodeSettings(
+            args.name, index, team, offset, pose_type, run.preprocess, entry=entry, deployment=dep
+        )
         run_robot_node(robot, loopback=loopback, ros_args=args.ros_args)
         return f"robot {args.name} stopped"
     from mrexplore.mission.centre import NO_ORACLE
@@ -241,7 +251,13 @@ def _ros2_sim(args: argparse.Namespace, argv: list[str]) -> str:
         double, rate = DoubleSettings(), None
         if args.nav2:
             offsets = tuple(r.offset for r in dep.robots)
-            double = DoubleSettings(args.slam_resolution, offsets, _DRIFT_M_PER_S, map_period_s=_SLAM_MAP_PERIOD_S)
+            double = DoubleSettings(
+                args.slam_resolution,
+                offsets,
+                _DRIFT_M_PER_S,
+                inscribed_radius_m=args.inscribed_radius,
+                map_period_s=_SLAM_MAP_PERIOD_S,
+            )
             rate = args.clock_rate
         sim_settings = SimSettings(
             spec, dep, args.lockstep, args.speed, progress_file=progress_file, double=double, clock_rate=rate

@@ -8,17 +8,16 @@ In: each robot's ``/mrexplore/NAME/frontiers`` and Nav2's word on its goals. Out
 ``/mrexplore/status``; services ``/mrexplore/pause``, ``resume``, ``stop``, ``return_home`` (docs/ros2.md
 lists every topic with its type).
 
-A frontier message that does not decode and a goal on a robot's topic that this centre did not send are each
-one warning line and are dropped; the node keeps what it had.
+A message that does not decode and a goal on a robot's topic that this centre did not send are each one
+warning line and dropped; the node keeps what it had.
 """
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -32,10 +31,11 @@ from mrexplore.pipeline import ExplorationPipeline
 from mrexplore.preprocessing.sparse_codec import peek
 from mrexplore.ros2.centre_lockstep import LockstepAnswers
 from mrexplore.ros2.centre_services import add_services
-from mrexplore.ros2.centre_views import WHY, Views, WireCounts, centre_status, team_summary
+from mrexplore.ros2.centre_views import WHY, Views, WireCounts, centre_record, centre_status, save_record, team_summary
 from mrexplore.ros2.deployment import Deployment
 from mrexplore.ros2.goals import goal_channel, goal_pose
 from mrexplore.ros2.lockstep import DecisionRequest
+from mrexplore.ros2.parameters import apply_parameters
 from mrexplore.ros2.robot_node import ACK, WHOLE_MAP, RobotNode, RobotNodeSettings
 from mrexplore.team.rounds import Admit, Reply, RoundCollector
 from mrexplore.types import MrExploreError
@@ -45,6 +45,7 @@ __all__ = ["CentreSettings", "CentreNode", "run_centre_node", "WireCounts"]
 Request = DecisionRequest | None
 _ASK_AGAIN_S = 0.5
 """A robot that has not answered a round is asked again this often (it may still be starting)."""
+_SAVE_EVERY_S = 2.0  # the record is written this often while the centre runs, and at its end
 _NAV = {"active": NavState.ACTIVE, "reached": NavState.REACHED, "aborted": NavState.ABORTED}
 
 
@@ -163,8 +164,9 @@ class CentreNode:
             return
         if lockstep:
             return
-        for channel in self.goals:
-            channel.tick()
+        for i, channel in enumerate(self.goals):
+            if i not in self.rounds.lost:  # a lost robot's Nav2 answers nothing: its goal is not sent again
+                channel.tick()
         if now >= self._next_round:
             self._next_round = now + self.settings.deployment.round_period_s
             for i, silent in self.rounds.mark_lost(now):
@@ -254,23 +256,11 @@ class CentreNode:
 
     def status(self, heard: Any = None, assignable: Any = None) -> dict[str, Any]:
         """What the status topic says (:func:`~mrexplore.ros2.centre_views.centre_status`)."""
-        counts = {
-            "goals_sent": self.goals_sent,
-            "goals_resent": sum(g.resent for g in self.goals),
-            "paused": self.paused,
-            "lost": [self.robots[i].name for i in sorted(self.rounds.lost)],
-            "finished": self.finished or self.planner.done_reason,
-        }
-        return centre_status(self.planner, [r.name for r in self.robots], self.round, counts, heard, assignable)
+        return centre_status(self, heard, assignable)
 
     def record(self) -> dict[str, Any]:
-        """The node's record: its status, each robot's wire counts, the decisions' latency."""
-        return {
-            **self.status(),
-            "warnings": self.warnings,
-            "wire": {r.name: w.__dict__ for r, w in zip(self.robots, self.wire, strict=True)},
-            "decision_ms": self.decision_ms,
-        }
+        """The node's record (:func:`~mrexplore.ros2.centre_views.centre_record`)."""
+        return centre_record(self)
 
 
 def run_centre_node(settings: CentreSettings, loopback: bool = True, ros_args: Sequence[str] = ()) -> str:
@@ -283,10 +273,16 @@ def run_centre_node(settings: CentreSettings, loopback: bool = True, ros_args: S
     why = "interrupted"
     centre: CentreNode | None = None
     try:
+        dep, team = apply_parameters(node, settings.deployment, settings.team)  # -p, --params-file
+        settings = replace(settings, deployment=dep, team=team)
         centre = CentreNode(node, settings)
         node.get_logger().info(f"centre ready: {len(settings.deployment.robots)} robots, {settings.strategy.name}")
+        saved = time.monotonic()
         while centre.finished is None:
             rclpy.spin_once(node, timeout_sec=0.2)
+            if settings.record is not None and time.monotonic() - saved > _SAVE_EVERY_S:
+                save_record(settings.record, centre)  # a centre killed (a crash, a power cut) leaves its counts
+                saved = time.monotonic()
         why = centre.finished
         t0 = time.monotonic()
         while time.monotonic() - t0 < 1.0:  # the last goals and views go out
@@ -295,7 +291,7 @@ def run_centre_node(settings: CentreSettings, loopback: bool = True, ros_args: S
         pass
     finally:
         if centre is not None and settings.record is not None:
-            settings.record.write_text(json.dumps(centre.record()))
+            save_record(settings.record, centre)
         node.destroy_node()
         rclpy.try_shutdown()
     return WHY.get(why, why)

@@ -16,7 +16,7 @@ from mrexplore.mission.centre import TeamPlanner
 from mrexplore.ros2.messages import markers_message, team_map_message
 from mrexplore.types import CellState
 
-__all__ = ["WireCounts", "Views", "centre_status", "team_summary", "WHY"]
+__all__ = ["WireCounts", "Views", "centre_status", "centre_record", "save_record", "team_summary", "WHY"]
 
 WHY = {
     "no_frontiers": "no frontier cluster of the minimum size is left",
@@ -56,27 +56,45 @@ class WireCounts:
             self.serialized_bytes += serialized
 
 
-def centre_status(
-    planner: TeamPlanner,
-    names: list[str],
-    round_: int,
-    counts: dict[str, Any],
-    heard: NDArray[Any] | None = None,
-    assignable: NDArray[Any] | None = None,
-) -> dict[str, Any]:
-    """What the status topic says: the round, whom the centre hears, the goals, the goal and robot counts
-    (``counts``: goals_sent, goals_resent, paused, lost, finished), why it ended."""
+Flags = NDArray[Any] | None
+
+
+def centre_status(centre: Any, heard: Flags = None, assignable: Flags = None) -> dict[str, Any]:
+    """What a :class:`~mrexplore.ros2.centre_node.CentreNode`'s status topic says: the round, whom it hears,
+    the goals, the goals sent and sent again, the robots lost, whether it is paused, why it ended."""
+    planner: TeamPlanner = centre.planner
     return {
-        "round": round_,
-        "robots": names,
+        "round": centre.round,
+        "robots": [r.name for r in centre.robots],
         "heard": [] if heard is None else [bool(h) for h in heard],
         "assignable": [] if assignable is None else [bool(a) for a in assignable],
         "goals_rc": planner.goals.tolist(),
         "clusters": 0 if planner.decision is None else len(planner.decision.clusters),
         "decisions": planner.decisions,
         "aborts": planner.aborts,
-        **counts,
+        "goals_sent": centre.goals_sent,
+        "goals_resent": sum(g.resent for g in centre.goals),
+        "paused": centre.paused,
+        "lost": [centre.robots[i].name for i in sorted(centre.rounds.lost)],
+        "finished": centre.finished or planner.done_reason,
     }
+
+
+def centre_record(centre: Any) -> dict[str, Any]:
+    """A centre node's record: its status, each robot's wire counts, the decisions' latency."""
+    return {
+        **centre_status(centre),
+        "warnings": centre.warnings,
+        "wire": {r.name: w.__dict__ for r, w in zip(centre.robots, centre.wire, strict=True)},
+        "decision_ms": centre.decision_ms,
+    }
+
+
+def save_record(path: Any, centre: Any) -> None:
+    """Write the centre's record to ``path`` whole or not at all (a reader never sees half a file)."""
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(centre_record(centre)))
+    tmp.replace(path)
 
 
 def team_summary(planner: TeamPlanner, n_robots: int, lost: int) -> str:

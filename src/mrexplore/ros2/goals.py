@@ -79,6 +79,7 @@ class TopicGoals:
         self._warned = 0
         self.resent = 0
         self._last: Any = None
+        self._held = False
         self.stamps: set[tuple[int, int]] = set()
         """The stamps of every goal this centre published (a goal on the topic with another is not ours)."""
         self._pub = node.create_publisher(PoseStamped, robot.goal_topic, 10)
@@ -91,9 +92,13 @@ class TopicGoals:
         self._publish(x, y, yaw)
 
     def _publish(self, x: float, y: float, yaw: float) -> None:
+        self._last = (x, y, yaw)
+        if self._pub.get_subscription_count() == 0:
+            self._held = True  # nobody listens yet (a centre just started): sent once somebody does
+            return
+        self._held = False
         stamp = self.node.get_clock().now().to_msg()
         self.stamps.add((int(stamp.sec), int(stamp.nanosec)))
-        self._last = (x, y, yaw)
         self._pub.publish(goal_message(x, y, yaw, self.robot.frame, stamp))
 
     def hold(self, x: float, y: float, yaw: float) -> None:
@@ -103,7 +108,10 @@ class TopicGoals:
     def tick(self) -> None:
         """Send the goal again where Nav2 has not listed it yet; read an abort held back until now."""
         now = self.now()
-        if self._last is not None and self.tracker.due_to_resend(now):
+        if self._held and self._last is not None:
+            self.tracker.last_send = now
+            self._publish(*self._last)
+        elif self._last is not None and self.tracker.due_to_resend(now):
             self.tracker.resent(now)
             self.resent += 1
             self._publish(*self._last)

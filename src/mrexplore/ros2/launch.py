@@ -23,78 +23,23 @@ import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 import yaml
 
 from mrexplore.config import RunConfig, config_yaml
 from mrexplore.mission import MissionSpec
 from mrexplore.ros2.deployment import Deployment, TeamGrid
+from mrexplore.ros2.processes import TeamProcesses
 from mrexplore.ros2.relay import relayed_topic
 from mrexplore.types import MrExploreError
 
-__all__ = ["launch_team", "TeamProcesses", "wire_summary"]
+__all__ = ["launch_team", "TeamProcesses", "wire_summary", "merged_records"]
 
 _LAUNCH_ONLY = {"--json": 0, "--direct-maps": 0}
 """launch's own flags (and how many values each takes), not passed on to the simulator."""
-_GRACE_S = 10.0
 _RESTART_AFTER_S = 1.0
 """A killed centre is started again this long after."""
-
-
-def _die_with_parent() -> None:  # pragma: no cover - runs in the child, before exec
-    """The child gets SIGTERM when the launcher dies, however it dies (Linux; elsewhere nothing)."""
-    try:
-        import ctypes
-
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
-    except OSError:
-        pass
-
-
-class TeamProcesses:
-    """The processes of one launch by name, each with its command and log, started, killed, started again and
-    ended together. Used from one thread: each child gets SIGTERM when the thread that started it ends."""
-
-    def __init__(self, work: Path) -> None:
-        self.work = work
-        self.commands: dict[str, list[str]] = {}
-        self.processes: dict[str, subprocess.Popen[str]] = {}
-        self._logs: list[IO[str]] = []
-
-    def start(self, name: str, cmd: list[str] | None = None, stdout: Any = subprocess.DEVNULL) -> subprocess.Popen[str]:
-        """Start ``cmd`` (default: the command ``name`` ran before) with its stderr in ``name``.log."""
-        cmd = cmd or self.commands[name]
-        log = open(self.work / f"{name}.log", "a")  # noqa: SIM115 - closed in stop_all
-        self._logs.append(log)
-        self.commands[name] = cmd
-        self.processes[name] = p = subprocess.Popen(
-            cmd, stdout=stdout, stderr=log, text=True, preexec_fn=_die_with_parent
-        )
-        return p
-
-    def kill(self, name: str) -> None:
-        """End ``name`` at once, as a crash or a power cut would (SIGKILL)."""
-        p = self.processes[name]
-        if p.poll() is None:
-            p.kill()
-            p.wait()
-
-    def stop_all(self) -> None:
-        """End every process still running: SIGTERM, then SIGKILL after a grace period."""
-        running = [p for p in self.processes.values() if p.poll() is None]
-        for p in running:
-            p.send_signal(signal.SIGTERM)
-        t0 = time.monotonic()
-        for p in running:
-            try:
-                p.wait(timeout=max(0.1, _GRACE_S - (time.monotonic() - t0)))
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait()
-        for log in self._logs:
-            log.close()
-        self._logs.clear()
 
 
 def _sim_argv(argv: list[str], progress_file: Path) -> list[str]:
@@ -131,11 +76,16 @@ class _Faults:
             + [(step, "centre", 0) for step in faults.centre_restarts]
         )
         self._restart_at: float | None = None
+        self.centres = 1
 
     def poll(self) -> None:
         if self._restart_at is not None and time.monotonic() >= self._restart_at:
             self._restart_at = None
-            self.team.start("centre")
+            self.centres += 1
+            cmd = self.team.commands["centre"]
+            record = cmd.index("--record") + 1  # each centre keeps its own record
+            cmd = [*cmd[:record], str(self.team.work / f"centre-{self.centres}.json"), *cmd[record + 1 :]]
+            self.team.start("centre", cmd)
         if not self.due or _sim_step(self.progress_file) < self.due[0][0]:
             return
         step, kind, robot = self.due.pop(0)
@@ -169,11 +119,14 @@ def launch_team(
     # The centre's clock follows the simulation's: a round every two steps, a full decision as often as the
     # simulator's own replanning.
     period = max(0.05, 2.0 / args.speed)
+    rate = args.clock_rate if getattr(args, "nav2", False) else 1.0
     deployment = replace(
         deployment,
         team_grid=grid,
         round_period_s=period,
         round_timeout_s=period,
+        # Five seconds of the wall clock, whatever the sim clock's rate: every process shares two cores here.
+        lost_after_s=deployment.lost_after_s * max(1.0, rate),
         replan_s=spec.mission_cfg.replan_every_steps / args.speed,
         min_replan_s=spec.mission_cfg.min_replan_steps / args.speed,
     )
@@ -234,10 +187,10 @@ def launch_team(
         sim_record = json.loads(out.strip().splitlines()[-1])
     finally:
         team.stop_all()
-    record_file = work / "centre.json"
-    if not record_file.is_file():
+    records = sorted(work.glob("centre*.json"), key=lambda p: (len(p.name), p.name))  # in the order they ran
+    if not records:
         raise MrExploreError(f"the centre wrote no record; its log is {work / 'centre.log'}")
-    centre = json.loads(record_file.read_text())
+    centre = merged_records([json.loads(p.read_text()) for p in records])
     double = ("goals_received", "aborts_caused", "preempted", "sim_seconds")
     return {
         "measures": {k: v for k, v in sim_record.items() if k not in ("starts_rc", "map_mismatches", *double)},
@@ -247,6 +200,7 @@ def launch_team(
         "map_mismatches": sim_record.get("map_mismatches"),
         "wire": wire_summary(centre["wire"]),
         "centre": {k: centre.get(k) for k in ("decisions", "aborts", "goals_resent", "warnings", "lost", "finished")},
+        "centres": len(records),
         "goals_sent": centre.get("goals_sent"),
         "goals_resent": centre.get("goals_resent"),
         "aborts_read": centre.get("aborts"),
@@ -274,3 +228,29 @@ def wire_summary(per_robot: dict[str, dict[str, int]]) -> dict[str, Any]:
     total["overhead_bytes_per_message"] = overhead / n if n else None
     total["per_robot"] = per_robot
     return total
+
+
+def merged_records(records: list[dict[str, Any]]) -> dict[str, Any]:
+    """The records of the centres that ran one after another (a restart starts a new one) as one: counts
+    summed, each robot's wire counts summed, the decisions' latencies joined, the state the last one's.
+
+    Examples
+    --------
+    >>> first = {"goals_sent": 9, "wire": {"r1": {"messages": 4}}, "decision_ms": [1.0], "finished": None}
+    >>> last = {"goals_sent": 3, "wire": {"r1": {"messages": 2}}, "decision_ms": [2.0], "finished": "stopped"}
+    >>> m = merged_records([first, last])
+    >>> m["goals_sent"], m["wire"], m["decision_ms"], m["finished"]
+    (12, {'r1': {'messages': 6}}, [1.0, 2.0], 'stopped')
+    """
+    merged = dict(records[-1])
+    for key in ("goals_sent", "goals_resent", "aborts", "decisions", "warnings"):
+        merged[key] = sum(r.get(key) or 0 for r in records)
+    merged["decision_ms"] = [ms for r in records for ms in r.get("decision_ms", [])]
+    wire: dict[str, dict[str, int]] = {}
+    for r in records:
+        for name, counts in r.get("wire", {}).items():
+            mine = wire.setdefault(name, {})
+            for k, v in counts.items():
+                mine[k] = mine.get(k, 0) + v
+    merged["wire"] = wire
+    return merged

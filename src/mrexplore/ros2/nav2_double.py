@@ -51,6 +51,9 @@ class DoubleSettings:
     """How fast each robot's odometry drifts from its map pose, metres per second of the double's clock."""
     result_timeout_s: float = 10.0
     """A terminal goal leaves the status array this long after it ended (rcl_action's default)."""
+    inscribed_radius_m: float = 0.0
+    """A goal this close to an obstacle of the robot's own map is refused by the planner, and the goal aborted
+    (Nav2's planners fail on a goal in lethal or inscribed cost; 0: only a goal on an obstacle)."""
     map_period_s: float = 0.0
     """Each robot's map is published this often (slam_toolbox's ``map_update_interval``; 0: every step)."""
 
@@ -125,7 +128,8 @@ class Nav2Double:
                 self.preempted += 1
         x, y = self.offsets[i].to_team(float(msg.pose.position.x), float(msg.pose.position.y))
         self._target[i] = self.frame.xy_to_rc((float(x), float(y)))
-        path = self._plan(i) if self.frame.contains(self._target[i]) else np.zeros((0, 2), np.int32)
+        reachable = self.frame.contains(self._target[i]) and not self._lethal(i)
+        path = self._plan(i) if reachable else np.zeros((0, 2), np.int32)
         sim.set_path(i, path)
         goal = _Goal(os.urandom(16), stamp, now_s, EXECUTING if len(path) else ABORTED)
         if not len(path):
@@ -137,12 +141,22 @@ class Nav2Double:
     def has_goal(self, i: int) -> bool:
         return bool(self.goals[i])
 
+    def _own_map(self, i: int) -> NDArray[np.uint8]:
+        belief = self.mission.sim.beliefs[i]
+        return classify(belief.log_odds, belief.observed, self.mission.sim_cfg.sensor)
+
+    def _lethal(self, i: int) -> bool:
+        """Whether robot i's goal lies within ``inscribed_radius_m`` of an obstacle of its own map."""
+        k = round(self.settings.inscribed_radius_m / self.frame.resolution_m)
+        r, c = self._target[i]
+        near = self._own_map(i)[max(0, r - k) : r + k + 1, max(0, c - k) : c + k + 1]
+        return bool((near == CellState.OCCUPIED).any())
+
     def _plan(self, i: int) -> NDArray[np.int32]:
         """Robot i's path to its goal as Nav2 would find it on the robot's own map: through the cells it
         holds free, else through unknown space too (``allow_unknown``); empty where neither leads there."""
         sim = self.mission.sim
-        belief = sim.beliefs[i]
-        own = classify(belief.log_odds, belief.observed, self.mission.sim_cfg.sensor)
+        own = self._own_map(i)
         here = (int(sim.positions_rc[i, 0]), int(sim.positions_rc[i, 1]))
         free, occupied = own == CellState.FREE, own == CellState.OCCUPIED
         if self._team_map is not None:  # the team map, as a Nav2 costmap's static layer may take it

@@ -24,7 +24,7 @@ from __future__ import annotations
 import importlib.util
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from mrexplore.config import GridThresholds, PreprocessConfig, SensorConfig
@@ -33,7 +33,7 @@ from mrexplore.maps.occupancy_grid import FrameOffset, state_in_team_frame, yaw_
 from mrexplore.preprocessing.agents import RobotAgent
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap
 from mrexplore.preprocessing.transmission import Outgoing
-from mrexplore.ros2.deployment import POSE_TYPES, RobotEntry
+from mrexplore.ros2.deployment import POSE_TYPES, Deployment, RobotEntry
 from mrexplore.ros2.messages import bytes_message, grid_data, pose_xyyaw
 from mrexplore.types import MrExploreError
 
@@ -60,6 +60,8 @@ class RobotNodeSettings:
     thresholds: GridThresholds = GridThresholds()
     entry: RobotEntry | None = None
     """The robot's entry in a deployment file (its topics); None: the default topics of ``name``."""
+    deployment: Deployment | None = None
+    """The team's deployment, whose settings the node declares as ROS parameters (None: none declared)."""
 
     @property
     def topics(self) -> RobotEntry:
@@ -101,11 +103,9 @@ class RobotNode:
         )
         node.create_subscription(OccupancyGrid, topics.map_topic, self._on_map, latched)
         self._tf: Any = None
+        self._frames_warned: set[str] = set()
         if settings.pose_type == "tf":  # the robot's pose looked up when a round is answered
-            import tf2_ros
-
-            self._tf = tf2_ros.Buffer()
-            self._tf_listener = tf2_ros.TransformListener(self._tf, node)
+            self._tf = _tf_buffer(node, topics)
         else:
             pose_msg = PoseWithCovarianceStamped if settings.pose_type == "pose_with_covariance" else Odometry
             node.create_subscription(pose_msg, topics.pose_topic, self._on_pose, 10)
@@ -129,6 +129,15 @@ class RobotNode:
         self._answer()
 
     def _on_pose(self, msg: Any) -> None:
+        frame, expected = str(msg.header.frame_id), self.settings.topics.frame
+        if frame.lstrip("/") != expected.lstrip("/"):
+            if frame not in self._frames_warned:  # once per frame: poses come many times a second
+                self._frames_warned.add(frame)
+                self._warn(
+                    f"pose dropped: {self.settings.topics.pose_topic} is in frame {frame!r}, the map in {expected!r}; "
+                    "give a pose in the map frame (AMCL's amcl_pose, slam_toolbox's pose) or pose_type tf"
+                )
+            return
         x, y, yaw = pose_xyyaw(msg.pose.pose)
         if self._place(x, y, yaw):
             self._pose_stamp = (int(msg.header.stamp.sec), int(msg.header.stamp.nanosec))
@@ -203,6 +212,29 @@ class RobotNode:
             self._warn(f"reply dropped: kind {values[1]} is neither {ACK} (ack) nor {WHOLE_MAP} (whole map)")
 
 
+def _tf_buffer(node: Any, topics: RobotEntry) -> Any:
+    """A tf2 buffer fed from the robot's own TF topics (nav2_bringup remaps each robot's ``/tf`` and
+    ``/tf_static`` to ``/NAME/tf`` and ``/NAME/tf_static``): subscribed here, as tf2_ros's listener takes
+    its topic names only in newer releases."""
+    import tf2_ros
+    from rclpy.qos import DurabilityPolicy, QoSProfile
+    from tf2_msgs.msg import TFMessage
+
+    buffer = tf2_ros.Buffer()
+    static_qos = QoSProfile(depth=100, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+    def feed(msg: Any, static: bool) -> None:
+        for t in msg.transforms:
+            if static:
+                buffer.set_transform_static(t, "mrexplore")
+            else:
+                buffer.set_transform(t, "mrexplore")
+
+    node.create_subscription(TFMessage, topics.tf_topic, lambda m: feed(m, False), 100)
+    node.create_subscription(TFMessage, topics.tf_static_topic, lambda m: feed(m, True), static_qos)
+    return buffer
+
+
 def start_rclpy(loopback: bool = True, ros_args: Sequence[str] = ()) -> Any:
     """rclpy, initialised for a node that takes SIGINT and SIGTERM itself (both raise KeyboardInterrupt in
     its bounded spins). ``loopback``: keep DDS on this machine first
@@ -235,7 +267,16 @@ def run_robot_node(settings: RobotNodeSettings, loopback: bool = True, ros_args:
     machine; ``ros_args``: see :func:`start_rclpy`."""
     rclpy = start_rclpy(loopback, ros_args)
     node = rclpy.create_node(f"mrexplore_{settings.name}")
-    serve(rclpy, node, lambda: RobotNode(node, settings), f"robot {settings.name} ready")
+
+    def build() -> RobotNode:
+        if settings.deployment is None:
+            return RobotNode(node, settings)
+        from mrexplore.ros2.parameters import apply_parameters
+
+        dep, team = apply_parameters(node, settings.deployment, settings.team)  # -p, --params-file
+        return RobotNode(node, replace(settings, team=team, deployment=dep))
+
+    serve(rclpy, node, build, f"robot {settings.name} ready")
 
 
 def serve(rclpy: Any, node: Any, build: Any, ready: str) -> Any:
