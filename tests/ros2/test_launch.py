@@ -59,3 +59,18 @@ def test_direct_maps_need_no_robot_node() -> None:
     launched = mrexplore("ros2", "launch", *MAP, "--strategy", "utility", "--lockstep", "--direct-maps")
     assert {k: launched[k] for k in SAME} == {k: alone[k] for k in SAME}
     assert launched["wire"]["payload_bytes"] == alone["bytes_sparse_delta"] and launched["map_mismatches"] == 0
+
+
+@pytest.mark.parametrize("fault", [[], ["--robot-failure", "1@60"]], ids=["none", "robot-node-killed"])
+def test_a_nav2_team_on_sim_time_with_slam_maps_finer_than_the_team_grid(fault: list[str]) -> None:
+    # The double behaves as Nav2 and slam_toolbox do: goals stamped on its sim clock (twice the wall clock),
+    # a new goal aborting the last, a map frame per robot a quarter turn apart, 0.05 m maps under 0.2 m cells.
+    nav2 = ["--nav2", "--slam-resolution", "0.05", "--clock-rate", "2"]
+    run = mrexplore("ros2", "launch", *MAP, "--strategy", "utility", "--speed", "20", *nav2, *fault)
+    assert run["coverage"] >= 0.99
+    assert run["goals_resent"] * 20 <= max(run["goals_sent"], 20)  # at most one goal in 20 sent again
+    double = run["nav2_double"]
+    assert double["preempted"] > 0  # the centre replaced goals, and their aborts were not read as aborts
+    assert run["aborts_read"] >= double["aborts_caused"] - double["aborts_crossed"]
+    assert run["robots_lost"] == (1 if fault else 0)
+    assert isinstance(run["ros_domain_id"], int)

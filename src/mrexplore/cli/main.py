@@ -74,7 +74,9 @@ def _run(args: argparse.Namespace, argv: list[str]) -> None:
     elif args.command == "report":
         print(run_report(args, argv))
     elif args.command == "ros2":
-        print(run_ros2(args, argv), file=sys.stderr)
+        said = run_ros2(args, argv)
+        if said:
+            print(said, file=sys.stderr)
 
 
 ROS_ARGS = "--ros-args"

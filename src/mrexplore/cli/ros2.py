@@ -145,6 +145,9 @@ def add_ros2(sub: Any) -> None:
     rl.add_argument("--loss", type=LOSS, required=True, metavar="P", help="share of frontier messages dropped")
     rl.add_argument("--seed", type=SEED, default=0, help="seed of the drops (default 0)")
     _add_team_flags(rl)
+    pa = kinds.add_parser("params", help="print the deployment's settings as a ROS 2 params file (for --params-file)")
+    pa.add_argument("--out", default=None, metavar="FILE", help="write it here instead of printing it")
+    _add_team_flags(pa)
     la = kinds.add_parser(
         "launch", help="sim, robot nodes and centre as separate processes on this machine (a demo, or a check)"
     )
@@ -184,6 +187,18 @@ def _deployment(args: argparse.Namespace, run: RunConfig) -> tuple[Any, Any]:
 def run_ros2(args: argparse.Namespace, argv: list[str]) -> str:
     import importlib.util
 
+    if args.ros2 == "params":  # plain data: no ROS needed
+        from mrexplore.ros2.parameters import params_yaml
+
+        run = run_config(args)
+        dep, team = _deployment(args, run)
+        text = params_yaml(replace(dep, team_grid=_team_grid_of(team)))
+        if args.out is None:
+            print(text, end="")
+            return ""
+        check_output(args.out, "--out")
+        Path(args.out).write_text(text)
+        return f"ROS 2 parameters written to {args.out}"
     if importlib.util.find_spec("rclpy") is None:  # found, not imported: DDS settings must come first
         raise MrExploreError("ROS 2 commands need rclpy; install it with: pip install -e '.[ros2]'")
     if args.ros2 in ("sim", "launch"):
@@ -297,3 +312,11 @@ def _nav2_deployment(spec: Any, dep: Any) -> Any:
         x, y = spec.truth.frame.rc_to_xy((int(starts[i, 0]), int(starts[i, 1])))
         robots.append({"name": r.name, "offset": [float(x), float(y), (i % 4) * math.pi / 2]})
     return Deployment.from_dict({**dep.to_dict(), "robots": robots})
+
+
+def _team_grid_of(team: Any) -> Any:
+    """The :class:`~mrexplore.ros2.deployment.TeamGrid` of a team grid's frame."""
+    from mrexplore.ros2.deployment import TeamGrid
+
+    h, w = team.height * team.resolution_m, team.width * team.resolution_m
+    return TeamGrid(team.origin_xy[0], team.origin_xy[1], round(w, 9), round(h, 9), team.resolution_m)

@@ -164,9 +164,10 @@ class CentreNode:
             return
         if lockstep:
             return
-        for i, channel in enumerate(self.goals):
+        period = self.settings.deployment.round_period_s
+        for i, (channel, heard) in enumerate(zip(self.goals, self.rounds.heard_at, strict=True)):
             if i not in self.rounds.lost:  # a lost robot's Nav2 answers nothing: its goal is not sent again
-                channel.tick()
+                channel.tick(answering=heard is not None and now - heard <= 2 * period)
         if now >= self._next_round:
             self._next_round = now + self.settings.deployment.round_period_s
             for i, silent in self.rounds.mark_lost(now):

@@ -7,7 +7,7 @@ Example file (every field but ``robots`` has a default; a robot given as a bare 
     team_grid: {x0: -20.0, y0: -20.0, width: 40.0, height: 40.0, resolution: 0.1}
     round_period_s: 1.0            # the centre asks for the robots' maps this often (real time)
     round_timeout_s: 0.5           # and decides on what arrived within this
-    lost_after_s: 5.0              # a robot silent this long gets no goal (its map stays)
+    lost_after_s: 5.0              # a robot silent this long is lost: no goal, not waited for
     blacklist_s: 30.0              # an aborted goal's clusters are kept from that robot this long
     replan_s: 10.0                 # a full decision at least this often
     min_replan_s: 1.0              # a goal already seen is driven on to until this passed since a decision
@@ -164,7 +164,7 @@ class Deployment(Checked):
     round_timeout_s: float = 0.5
     """And decides on what arrived within this, seconds."""
     lost_after_s: float = 5.0
-    """A robot silent this long gets no goal (its map stays), seconds."""
+    """A robot silent this long is lost: no goal, rounds no longer wait for it (its map stays), seconds."""
     blacklist_s: float = 30.0
     """An aborted goal's clusters are kept from that robot this long, seconds."""
     replan_s: float = 10.0

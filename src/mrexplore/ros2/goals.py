@@ -105,13 +105,14 @@ class TopicGoals:
         """Stop where it stands: its own pose as its goal."""
         self.send(x, y, yaw)
 
-    def tick(self) -> None:
-        """Send the goal again where Nav2 has not listed it yet; read an abort held back until now."""
+    def tick(self, answering: bool = True) -> None:
+        """Send the goal again where Nav2 has not listed it yet and the robot still ``answering`` the centre's
+        rounds (a robot that does not answer would not take it either); read an abort held back until now."""
         now = self.now()
         if self._held and self._last is not None:
             self.tracker.last_send = now
             self._publish(*self._last)
-        elif self._last is not None and self.tracker.due_to_resend(now):
+        elif self._last is not None and answering and self.tracker.due_to_resend(now):
             self.tracker.resent(now)
             self.resent += 1
             self._publish(*self._last)
@@ -189,7 +190,7 @@ class ActionGoals:
             self._handle.cancel_goal_async()
             self._handle = None
 
-    def tick(self) -> None:
+    def tick(self, answering: bool = True) -> None:
         """Nothing to send again: the action's goal request is acknowledged."""
 
 

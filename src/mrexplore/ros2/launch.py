@@ -191,7 +191,7 @@ def launch_team(
     if not records:
         raise MrExploreError(f"the centre wrote no record; its log is {work / 'centre.log'}")
     centre = merged_records([json.loads(p.read_text()) for p in records])
-    double = ("goals_received", "aborts_caused", "preempted", "sim_seconds")
+    double = ("goals_received", "aborts_caused", "aborts_crossed", "preempted", "sim_seconds")
     return {
         "measures": {k: v for k, v in sim_record.items() if k not in ("starts_rc", "map_mismatches", *double)},
         "starts_rc": sim_record.get("starts_rc", []),

@@ -36,7 +36,11 @@ from mrexplore.sim.belief import classify
 from mrexplore.team.nav_goals import ABORTED, EXECUTING, SUCCEEDED
 from mrexplore.types import CellState, MrExploreError
 
-__all__ = ["DoubleSettings", "Nav2Double", "SimClock"]
+__all__ = ["DoubleSettings", "Nav2Double", "SimClock", "CROSSED_S"]
+
+CROSSED_S = 0.5
+"""A goal that arrives this soon after the robot's last goal was aborted (seconds of the double's clock) was
+sent before the centre could have read the abort: the abort is of a goal the centre already replaced."""
 
 
 @dataclass(frozen=True)
@@ -107,6 +111,9 @@ class Nav2Double:
         """Goals aborted because no way to them was known (what the centre should read as aborts)."""
         self.preempted = 0
         """Goals aborted because a newer one replaced them."""
+        self.crossed = 0
+        """Aborts a new goal crossed: it came within ``CROSSED_S`` of the abort, sent before the abort was read."""
+        self._aborted_at: list[float | None] = [None] * n
         self.expired = 0
         """Terminal goals dropped from the status array after ``result_timeout_s``."""
 
@@ -122,6 +129,10 @@ class Nav2Double:
             return  # a failed robot's Nav2 answers nothing
         stamp = self.now()
         now_s = self._seconds(stamp)
+        aborted = self._aborted_at[i]
+        if aborted is not None and now_s - aborted < CROSSED_S:
+            self.crossed += 1
+        self._aborted_at[i] = None
         for goal in self.goals[i]:
             if goal.status == EXECUTING:
                 goal.status, goal.ended_s = ABORTED, now_s  # preempted (SimpleActionServer::accept_pending_goal)
@@ -133,7 +144,7 @@ class Nav2Double:
         sim.set_path(i, path)
         goal = _Goal(os.urandom(16), stamp, now_s, EXECUTING if len(path) else ABORTED)
         if not len(path):
-            goal.ended_s = now_s
+            goal.ended_s = self._aborted_at[i] = now_s
             self.aborts_caused += 1
         self.goals[i].append(goal)
         self._publish_status(i)
@@ -188,6 +199,7 @@ class Nav2Double:
                     sim.set_path(i, path)
                     if not len(path):
                         goal.status, goal.ended_s, changed = ABORTED, now_s, True
+                        self._aborted_at[i] = now_s
                         self.aborts_caused += 1
                 elif sim.at_path_end(i):
                     goal.status, goal.ended_s, changed = SUCCEEDED, now_s, True

@@ -283,6 +283,7 @@ def _run_real_time(rclpy: Any, node: Any, sim_node: SimNode) -> dict[str, Any]:
         "starts_rc": sim_node.mission.starts_rc.tolist(),
         "goals_received": sum(len(g) for g in double.goals) + double.expired,
         "aborts_caused": double.aborts_caused,
+        "aborts_crossed": double.crossed,
         "preempted": double.preempted,
         "sim_seconds": clock.seconds(),
     }
