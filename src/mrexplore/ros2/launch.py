@@ -38,6 +38,8 @@ __all__ = ["launch_team", "TeamProcesses", "wire_summary", "merged_records"]
 
 _LAUNCH_ONLY = {"--json": 0, "--direct-maps": 0}
 """launch's own flags (and how many values each takes), not passed on to the simulator."""
+_SAY_EVERY_S = 5.0
+"""How often the launcher says how far the simulation got."""
 _RESTART_AFTER_S = 1.0
 """A killed centre is started again this long after."""
 
@@ -54,6 +56,15 @@ def _sim_argv(argv: list[str], progress_file: Path) -> list[str]:
             continue
         out.append("sim" if arg == "launch" and k > 0 and argv[k - 1] == "ros2" else arg)
     return [*out, "--json", "--progress-file", str(progress_file)]
+
+
+def _say_progress(progress_file: Path) -> None:
+    try:
+        progress = json.loads(progress_file.read_text())
+    except (OSError, ValueError):
+        print("starting: the nodes load (a first run compiles its kernels: a minute or more)", file=sys.stderr)
+        return
+    print(f"step {progress['step']}, coverage {progress['coverage']:.1%}", file=sys.stderr)
 
 
 def _sim_step(progress_file: Path) -> int:
@@ -116,20 +127,7 @@ def launch_team(
     work = Path(tempfile.mkdtemp(prefix="mrexplore_launch_"))
     config = work / "config.yaml"
     config.write_text(config_yaml(run))
-    # The centre's clock follows the simulation's: a round every two steps, a full decision as often as the
-    # simulator's own replanning.
-    period = max(0.05, 2.0 / args.speed)
-    rate = args.clock_rate if getattr(args, "nav2", False) else 1.0
-    deployment = replace(
-        deployment,
-        team_grid=grid,
-        round_period_s=period,
-        round_timeout_s=period,
-        # Five seconds of the wall clock, whatever the sim clock's rate: every process shares two cores here.
-        lost_after_s=deployment.lost_after_s * max(1.0, rate),
-        replan_s=spec.mission_cfg.replan_every_steps / args.speed,
-        min_replan_s=spec.mission_cfg.min_replan_steps / args.speed,
-    )
+    deployment = _timed(deployment, grid, spec, args)
     loss = spec.mission_cfg.faults.message_loss
     robots_file, centre_file = work / "deployment.yaml", work / "centre_deployment.yaml"
     robots_file.write_text(yaml.safe_dump(deployment.to_dict(), sort_keys=False))
@@ -176,9 +174,13 @@ def launch_team(
             file=sys.stderr,
         )
         faults = _Faults(team, spec, names, progress_file)
+        said = time.monotonic()
         while sim.poll() is None:
             faults.poll()
             time.sleep(0.02)
+            if time.monotonic() - said >= _SAY_EVERY_S:  # a line every few seconds: the run is alive
+                said = time.monotonic()
+                _say_progress(progress_file)
         assert sim.stdout is not None
         out = sim.stdout.read()
         if sim.returncode != 0:
@@ -187,6 +189,28 @@ def launch_team(
         sim_record = json.loads(out.strip().splitlines()[-1])
     finally:
         team.stop_all()
+    return _launch_record(work, sim_record, args)
+
+
+def _timed(deployment: Deployment, grid: TeamGrid, spec: MissionSpec, args: argparse.Namespace) -> Deployment:
+    """The deployment on the launch's team grid, its centre's clock following the simulation's: a round every
+    two steps, a full decision as often as the simulator's own replanning."""
+    period = max(0.05, 2.0 / args.speed)
+    rate = args.clock_rate if getattr(args, "nav2", False) else 1.0
+    return replace(
+        deployment,
+        team_grid=grid,
+        round_period_s=period,
+        round_timeout_s=period,
+        # Five seconds of the wall clock, whatever the sim clock's rate: every process shares two cores here.
+        lost_after_s=deployment.lost_after_s * max(1.0, rate),
+        replan_s=spec.mission_cfg.replan_every_steps / args.speed,
+        min_replan_s=spec.mission_cfg.min_replan_steps / args.speed,
+    )
+
+
+def _launch_record(work: Path, sim_record: dict[str, Any], args: argparse.Namespace) -> dict[str, Any]:
+    """The simulator's measures and what the centres (one, or one per restart) counted."""
     records = sorted(work.glob("centre*.json"), key=lambda p: (len(p.name), p.name))  # in the order they ran
     if not records:
         raise MrExploreError(f"the centre wrote no record; its log is {work / 'centre.log'}")
