@@ -4,6 +4,7 @@ multi-robot launch reads."""
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from mrexplore.config.schema import is_finite
@@ -12,10 +13,13 @@ from mrexplore.types import MrExploreError
 
 __all__ = ["nav2_robots", "bringup_deployment"]
 
+_JAZZY = re.compile(r"^\s*([A-Za-z][A-Za-z0-9_]*)\s*=\s*(\{.*\})\s*$", re.DOTALL)
+
 
 def nav2_robots(text: str, shared_map: bool) -> list[dict[str, Any]]:
-    """A deployment's robots from the ``robots`` argument of nav2_bringup's cloned multi-robot launch
-    (YAML mappings separated by ``;``, each a ``name`` and a ``pose`` of ``x``, ``y``, ``yaw``): each
+    """A deployment's robots from the ``robots`` argument of nav2_bringup's cloned multi-robot launch, robots
+    separated by ``;``, each a YAML mapping of a ``name`` and a ``pose`` of ``x``, ``y``, ``yaw`` (the current
+    launch) or ``NAME={x: X, y: Y, yaw: A}`` (Jazzy's ``ParseMultiRobotPose``): each
     robot's map frame is where it started (slam_toolbox starts its map at the robot's first pose), or the
     team frame where the robots localise on one shared map (AMCL); one line naming the problem otherwise.
 
@@ -26,12 +30,18 @@ def nav2_robots(text: str, shared_map: bool) -> list[dict[str, Any]]:
     [('robot1', [0.5, 0.5, 0.0]), ('robot2', [-0.5, 1.0, 1.5])]
     >>> nav2_robots(robots, shared_map=True)[1]["offset"]
     [0.0, 0.0, 0.0]
+    >>> nav2_robots("robot1={x: 1.0, y: 2.0, yaw: 0.5}; robot2={x: -1.0}", shared_map=False)[1]
+    {'name': 'robot2', 'offset': [-1.0, 0.0, 0.0]}
     """
     from mrexplore.config.safe_yaml import load_yaml_text
 
     robots = []
     for k, part in enumerate(p for p in text.split(";") if p.strip()):
-        entry = load_yaml_text(part, f"robots argument, robot {k + 1}")
+        jazzy = _JAZZY.match(part)  # Jazzy's ParseMultiRobotPose: robot1={x: 1.0, y: 1.0, yaw: 0.0}
+        if jazzy:
+            entry = {"name": jazzy.group(1), "pose": load_yaml_text(jazzy.group(2), f"robots argument, robot {k + 1}")}
+        else:
+            entry = load_yaml_text(part, f"robots argument, robot {k + 1}")
         if not isinstance(entry, dict) or "name" not in entry:
             raise MrExploreError(
                 f"robots argument, robot {k + 1}: give {{name: 'robotN', pose: {{x: X, y: Y, yaw: A}}}}"
