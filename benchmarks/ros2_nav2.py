@@ -27,7 +27,11 @@ from mrexplore.runtime.example_maps import maps_dir
 
 HOUSE = "houseexpo/json/0a1b29dba355df2ab02630133187bfab.json"
 DUNGEON = "dungeon/complex_img_43.png"
-FAULTS = {"none": [], "robot node killed": ["--robot-failure", "1@150"], "centre restarted": ["--centre-restart", "150"]}
+FAULTS = {
+    "none": [],
+    "robot node killed": ["--robot-failure", "1@150"],
+    "centre restarted": ["--centre-restart", "150"],
+}
 
 
 def launch(*args: str) -> dict[str, Any]:
