@@ -180,14 +180,19 @@ def test_outputs_are_checked_before_the_mission(monkeypatch, capsys) -> None:
     for flag in ("--gif", "--png", "--save-map"):
         assert main(["explore", "--map", "generated:3", *FAST, flag, "/nonexistent/out"]) == 2
         assert _err(capsys) == f"{flag} folder /nonexistent does not exist; create it first"
+    if Path("/proc/self").is_dir():  # a folder that exists and takes no file: found by creating one, before work
+        assert main(["explore", "--map", "generated:3", *FAST, "--png", "/proc/x.png"]) == 2
+        assert _err(capsys) == "--png /proc/x.png cannot be written (/proc takes no new files); choose a writable path"
 
 
 def test_bench_and_train_arguments(tmp_path, capsys) -> None:
     out = tmp_path / "out"
-    assert main(["bench", "--maps", "generated:1", "--out", str(out), "--workers", "-1"]) == 2
-    assert _err(capsys) == (
-        "argument --workers: must be an integer >= 0 (0: one per core), got '-1'; see 'mrexplore bench --help'"
-    )
+    for workers in ("-1", "0"):
+        assert main(["bench", "--maps", "generated:1", "--out", str(out), "--workers", workers]) == 2
+        assert _err(capsys) == (
+            f"argument --workers: must be an integer >= 1 (leave the flag out for one per core), got '{workers}'; "
+            "see 'mrexplore bench --help'"
+        )
     assert main(["bench", "--maps", "generated:1", "--out", str(out), "--team-sizes", "2,2"]) == 2
     assert _err(capsys) == "--team-sizes names a team size twice (2,2); give each size once"
     assert main(["bench", "--maps", "generated:1", "--out", str(out), "--robots", "2,3"]) == 2

@@ -39,7 +39,7 @@ def add_bench(sub: Any) -> None:
     )
     be.add_argument("--seeds", type=COUNT, default=3, help="seeds 0..N-1 per map (default 3)")
     be.add_argument("--out", required=True, help="folder for results.csv and report.md")
-    be.add_argument("--workers", type=WORKERS, default=0, help="worker processes (default: one per core)")
+    be.add_argument("--workers", type=WORKERS, default=None, help="worker processes (default: one per core)")
     be.add_argument(
         "--ray-address",
         default=None,
@@ -80,7 +80,7 @@ def run_bench_command(args: argparse.Namespace, argv: Sequence[str]) -> str:
         for seed in range(args.seeds)
     ]
     out = Path(args.out)
-    ran = run_bench(specs, out / "results.csv", args.workers, args.progress, args.ray_address)
+    ran = run_bench(specs, out / "results.csv", args.workers or 0, args.progress, args.ray_address)
     command = "mrexplore " + " ".join(argv)
     write_report(out / "results.csv", out / "report.md", strategies, command)
     return f"{ran} episodes run, {len(specs) - ran} already done; wrote {out / 'results.csv'} and {out / 'report.md'}"

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -103,7 +102,7 @@ POSITIVE = number(1e-300, "a number > 0")
 NON_NEGATIVE = number(0, "a number >= 0")
 SEED = number(0, "an integer >= 0", integer=True)
 COUNT = number(1, "an integer >= 1", integer=True)
-WORKERS = number(0, "an integer >= 0 (0: one per core)", integer=True)
+WORKERS = number(1, "an integer >= 1 (leave the flag out for one per core)", integer=True)
 LOSS = number(0, "a probability in [0, 1)", below=1)
 
 
@@ -135,7 +134,8 @@ def check_failures(run: RunConfig, n: int) -> None:
 
 
 def check_output(path: str | None, flag: str, folder: bool = False) -> None:
-    """Refuse, before any work, an output path that cannot be written."""
+    """Refuse, before any work, an output path that cannot be written: a file is created there and removed
+    again (an existing file is opened for appending, not changed); a folder must take a new file."""
     if path is None:
         return
     p = Path(path)
@@ -143,14 +143,40 @@ def check_output(path: str | None, flag: str, folder: bool = False) -> None:
         if p.exists() and not p.is_dir():
             raise MrExploreError(f"{flag} {p} is a file, not a folder; pass a folder")
         parent = p if p.exists() else next((q for q in p.parents if q.exists()), Path("."))
-    else:
-        if p.is_dir():
-            raise MrExploreError(f"{flag} {p} is a folder; pass a file path")
-        parent = p.parent
-        if not parent.is_dir():
-            raise MrExploreError(f"{flag} folder {parent} does not exist; create it first")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise MrExploreError(f"{flag} {p} cannot be written ({parent} is not writable); choose a writable path")
+        _try_writing(flag, p, parent, None)
+        return
+    if p.is_dir():
+        raise MrExploreError(f"{flag} {p} is a folder; pass a file path")
+    if not p.parent.is_dir():
+        raise MrExploreError(f"{flag} folder {p.parent} does not exist; create it first")
+    _try_writing(flag, p, p.parent, p)
+
+
+def _try_writing(flag: str, p: Path, parent: Path, target: Path | None) -> None:
+    """Create ``target`` (or a temporary file in ``parent``) and remove it; one line naming why it failed."""
+    import errno
+    import tempfile
+
+    try:
+        if target is None:
+            with tempfile.TemporaryFile(dir=parent):
+                pass
+        elif target.exists():
+            with open(target, "ab"):
+                pass
+        else:
+            with open(target, "xb"):
+                pass
+            target.unlink()
+    except OSError as exc:
+        why = {
+            errno.EACCES: f"permission denied in {parent}",
+            errno.EPERM: f"permission denied in {parent}",
+            errno.EROFS: f"{parent} is on a read-only file system",
+            errno.ENOENT: f"{parent} takes no new files",
+            errno.ENOSPC: f"no space left in {parent}",
+        }.get(exc.errno or 0, exc.strerror or type(exc).__name__)
+        raise MrExploreError(f"{flag} {p} cannot be written ({why}); choose a writable path") from None
 
 
 def need_torch() -> None:

@@ -44,7 +44,7 @@ def add_report(sub: Any) -> None:
     po.add_argument("policies", nargs="+", help="policy files (.npz), the first is the yardstick")
     po.add_argument("--fresh", type=SEED, default=0, help="N fresh varied: plans instead of the validation maps")
     po.add_argument("--robots", type=COUNT, default=None, help="robots per episode (default: train.val_robots)")
-    po.add_argument("--workers", type=WORKERS, default=0, help="worker processes (default: one per core)")
+    po.add_argument("--workers", type=WORKERS, default=None, help="worker processes (default: one per core)")
     po.add_argument("--train-maps", default=None, help="folder of training maps (default: train/ of the example maps)")
     po.add_argument("--csv", default=None, help="write every map's results per policy here")
 
@@ -90,7 +90,7 @@ def run_report(args: argparse.Namespace, argv: Sequence[str]) -> str:
     from mrexplore.training.compare import compare_policies
 
     lines, per_map = compare_policies(
-        [Path(p) for p in args.policies], train_maps(args.train_maps), args.fresh, args.robots, args.workers
+        [Path(p) for p in args.policies], train_maps(args.train_maps), args.fresh, args.robots, args.workers or 0
     )
     if args.csv is not None:
         with open(args.csv, "w", newline="") as f:

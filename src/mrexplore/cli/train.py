@@ -54,7 +54,7 @@ def add_train(sub: Any) -> None:
     budget = tr.add_mutually_exclusive_group()
     budget.add_argument("--minutes", type=float, default=None, help="stop starting stages after this many minutes")
     budget.add_argument("--episodes", type=int, default=None, help="stop after this many training episodes")
-    tr.add_argument("--workers", type=WORKERS, default=0, help="worker processes (default: one per core)")
+    tr.add_argument("--workers", type=WORKERS, default=None, help="worker processes (default: one per core)")
     tr.add_argument("--ray-address", default=None, help="run episodes as Ray tasks: 'local', 'auto' or HOST:PORT")
     tr.add_argument("--resume", action="store_true", help="continue the run in --out after its last finished stage")
     tr.add_argument("--seed", type=SEED, default=0, help="seed of the run (default 0)")
@@ -87,7 +87,7 @@ def _run_options(args: argparse.Namespace) -> dict[str, Any]:
         "out": Path(args.out),
         "train_dir": train_maps(args.train_maps),
         "minutes": args.minutes,
-        "workers": args.workers,
+        "workers": args.workers or 0,
         "ray_address": args.ray_address,
         "resume": args.resume,
         "seed": args.seed,
