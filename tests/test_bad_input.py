@@ -355,3 +355,12 @@ def test_a_policy_archive_that_unpacks_beyond_the_limit_is_refused_unread(tmp_pa
         f"policy file {bomb} is not a mrexplore policy (it unpacks to {MAX_POLICY_BYTES + 1} bytes, over the "
         f"{MAX_POLICY_BYTES}-byte limit); retrain it"
     )
+
+
+def test_a_team_too_large_for_its_map_is_warned_about_once(capsys) -> None:
+    # generated:0 at 0.2 m holds 157 m^2 of free space: 39 robots at 4 m^2 each
+    assert main(["explore", "--map", "generated:0", "--resolution", "0.2", "--robots", "60", "--max-steps", "1"]) == 0
+    warnings = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    assert len(warnings) == 1
+    assert warnings[0].startswith("mrexplore: warning: map generated:0: 60 robots on ")
+    assert warnings[0].endswith("m^2 each): most will wait in each other's way; 39 robots suit it")

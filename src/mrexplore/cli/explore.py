@@ -106,6 +106,9 @@ def mission_setup(args: argparse.Namespace) -> tuple[RunConfig, Any, Any, NDArra
     strategy = make_run_strategy(args, run)
     check_failures(run, run.sim.robots)
     truth = load_map(args.map, run.map)
+    from mrexplore.maps.plan_check import check_team_size
+
+    check_team_size(int((~truth.occupied).sum()), truth.resolution_m, run.sim.robots, truth.name)
     starts = team_starts(truth, args.start or [], run.sim.robots, run.sim.start_spread_m, args.seed)
     return run, strategy, truth, starts
 

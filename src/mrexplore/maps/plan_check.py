@@ -16,7 +16,7 @@ from scipy import ndimage
 
 from mrexplore.types import MrExploreError
 
-__all__ = ["MapWarning", "check_tones", "check_plan"]
+__all__ = ["MapWarning", "check_tones", "check_plan", "check_team_size", "ROOM_PER_ROBOT_M2"]
 
 MID_GREY = (40, 215)
 """Grey values read as neither white nor black (exclusive); 205, map_server's unknown, is not counted."""
@@ -104,6 +104,35 @@ def check_plan(occupied: NDArray[np.bool_], resolution_m: float, name: str) -> N
         warnings.warn(
             f"map {name} may not be a floor plan: {share:.0%} of its free space in one region, {pieces} pieces of "
             f"wall ({density:.2f} per m^2); check the result with --png",
+            MapWarning,
+            stacklevel=2,
+        )
+
+
+ROOM_PER_ROBOT_M2 = 4.0
+"""Free space below which a team is warned that it is too large for its map, m^2 a robot."""
+
+
+def check_team_size(free_cells: int, resolution_m: float, robots: int, name: str) -> None:
+    """One warning where a team is too large for its map: less than :data:`ROOM_PER_ROBOT_M2` of free space a
+    robot, where robots mostly wait in each other's way.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     check_team_size(1500, 0.1, 3, "room")  # 15 m^2: fine for 3
+    ...     check_team_size(1500, 0.1, 20, "room")
+    >>> [str(w.message)[:60] for w in caught]
+    ['map room: 20 robots on 15 m^2 of free space (0.8 m^2 each): ']
+    """
+    area = free_cells * resolution_m**2
+    if robots > 1 and area / robots < ROOM_PER_ROBOT_M2:
+        suit = max(1, int(area // ROOM_PER_ROBOT_M2))
+        warnings.warn(
+            f"map {name}: {robots} robots on {area:.0f} m^2 of free space ({area / robots:.1f} m^2 each): most "
+            f"will wait in each other's way; {suit} robot{'s' * (suit != 1)} suit it",
             MapWarning,
             stacklevel=2,
         )
