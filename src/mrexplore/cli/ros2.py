@@ -156,6 +156,9 @@ def add_ros2(sub: Any) -> None:
     la.add_argument("--speed", type=POSITIVE, default=10.0, help="simulation steps a second in real time (default 10)")
     la.add_argument("--direct-maps", action="store_true", help="no robot nodes: the centre reads the robots' maps")
     la.add_argument(
+        "--keep-logs", action="store_true", help="keep the processes' logs and records (a failed run always keeps them)"
+    )
+    la.add_argument(
         "--json", action="store_true", help="print explore's record plus the bytes measured on the wire, as JSON"
     )
     la.add_argument("--network", action="store_true", help="use the system's DDS settings (default: loopback)")

@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -36,7 +37,7 @@ from mrexplore.types import MrExploreError
 
 __all__ = ["launch_team", "TeamProcesses", "wire_summary", "merged_records"]
 
-_LAUNCH_ONLY = {"--json": 0, "--direct-maps": 0}
+_LAUNCH_ONLY = {"--json": 0, "--direct-maps": 0, "--keep-logs": 0}
 """launch's own flags (and how many values each takes), not passed on to the simulator."""
 _SAY_EVERY_S = 5.0
 """How often the launcher says how far the simulation got."""
@@ -170,7 +171,8 @@ def launch_team(
         print(
             f"launched: sim, {'no robot nodes' if args.direct_maps else f'{len(names)} robot nodes'}, "
             f"{'a relay losing ' + format(loss, '.0%') + ', ' if loss > 0 else ''}"
-            f"centre ({'lockstep' if args.lockstep else 'real time'}); ROS domain {domain}; logs in {work}",
+            f"centre ({'lockstep' if args.lockstep else 'real time'}); ROS domain {domain}; logs in {work}"
+            f"{'' if args.keep_logs else ' (removed at the end unless the run fails; --keep-logs keeps them)'}",
             file=sys.stderr,
         )
         faults = _Faults(team, spec, names, progress_file)
@@ -189,7 +191,11 @@ def launch_team(
         sim_record = json.loads(out.strip().splitlines()[-1])
     finally:
         team.stop_all()
-    return _launch_record(work, sim_record, args)
+    record = _launch_record(work, sim_record, args)
+    if not args.keep_logs:  # a run that ended well leaves nothing behind; a failed one keeps its logs (above)
+        shutil.rmtree(work, ignore_errors=True)
+        record["logs"] = None
+    return record
 
 
 def _timed(deployment: Deployment, grid: TeamGrid, spec: MissionSpec, args: argparse.Namespace) -> Deployment:
