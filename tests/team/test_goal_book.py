@@ -40,3 +40,14 @@ def test_a_decision_is_due_on_the_timer_or_when_asked() -> None:
     assert decision_due(now=10.0, last=0.0, replan=10.0, asked=False)
     assert not decision_due(now=9.0, last=0.0, replan=10.0, asked=False)
     assert decision_due(now=9.0, last=0.0, replan=10.0, asked=True)
+
+
+def test_a_place_aborted_three_times_is_dropped_for_the_team_and_a_bar_covers_given_cells() -> None:
+    book = GoalBook(2, (6, 6))
+    assert book.strike(np.array([2, 2]), radius_cells=0, limit=3) == 0
+    assert book.strike(np.array([2, 2]), radius_cells=1, limit=3) == 0  # (2, 2) twice, its neighbours once
+    assert book.strike(np.array([2, 2]), radius_cells=0, limit=3) == 1
+    assert np.argwhere(book.blacklist).tolist() == [[2, 2]]
+    book.bar(0, np.array([0, 0]), radius_cells=0, until=5.0, cells=np.array([[5, 5], [4, 5]], np.int32))
+    mask = book.barred(0, now=1.0)
+    assert mask is not None and np.argwhere(mask).tolist() == [[0, 0], [4, 5], [5, 5]]

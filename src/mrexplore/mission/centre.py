@@ -4,8 +4,9 @@ between decisions as a robot's navigation reports on them. ``mrexplore ros2 cent
 it; it imports no ROS.
 
 A robot's goal ends when its navigation reports it reached (a goal it stood on that still borders unknown
-space stops being a candidate, as in the simulator), aborted (the clusters centred around it are kept from
-that robot for ``blacklist_s``, as explore_lite's blacklist does), or when the goal no longer borders unknown space on
+space stops being a candidate, as in the simulator), aborted (the clusters centred around it, and the rest of
+its cluster, are kept from that robot for ``blacklist_s``, as explore_lite's blacklist does; a place aborted
+:data:`STRIKES_TO_DROP` times is dropped for the team for good), or when the goal no longer borders unknown space on
 the team map (once ``min_replan_s`` passed since the last decision); the robot then moves on to the next
 target of its local route that still does, and only with none left does it ask for a decision. The whole
 team is re-assigned when a robot asks, and at least every ``replan_s``; a robot whose goal the new decision
@@ -48,6 +49,8 @@ from mrexplore.types import BoolGrid, CellState, MrExploreError
 
 __all__ = ["TeamPlanner", "NavState", "NO_ORACLE"]
 
+STRIKES_TO_DROP = 3
+"""Aborted goals whose areas overlap a cell before it is dropped for the whole team for good."""
 NO_ORACLE = "the oracle needs the ground truth, which a real team lacks; pick another strategy"
 
 
@@ -135,7 +138,10 @@ class TeamPlanner:
             return
         self.nav[robot] = state
         if state == NavState.ABORTED:
-            self.book.bar(robot, goal, self._radius, until=now + self.blacklist_s)
+            # Kept from that robot a while: the goal's square and the rest of its cluster (else the next
+            # decision picks the cluster's next member, which its navigation refuses the same way).
+            self.book.bar(robot, goal, self._radius, until=now + self.blacklist_s, cells=self._cluster_of(goal))
+            self.book.strike(goal, self._radius, STRIKES_TO_DROP)
             self.aborts += 1
             self._drop(robot)
         elif state == NavState.REACHED:
@@ -152,6 +158,14 @@ class TeamPlanner:
     def routes(self) -> list[NDArray[np.int32]]:
         """Each robot's targets after its goal (the local layer's route)."""
         return self.book.routes
+
+    def _cluster_of(self, goal: NDArray[np.integer]) -> NDArray[np.int32] | None:
+        """The members of the last decision's cluster that holds ``goal`` (None: none does)."""
+        if self.decision is None:
+            return None
+        clusters = self.decision.clusters
+        hit = np.flatnonzero((clusters.members_rc == np.asarray(goal)).all(axis=1))
+        return clusters.members_rc[clusters.labels == clusters.labels[hit[0]]] if len(hit) else None
 
     def _drop(self, robot: int) -> None:
         self._freed.add(robot)

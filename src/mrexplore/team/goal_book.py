@@ -67,8 +67,10 @@ class GoalBook:
         """Each robot's targets after its goal, ``(k, 2) int32``."""
         self.blacklist = np.zeros(shape, dtype=bool)
         """``(H, W) bool`` cells no robot is sent to again."""
-        self._barred: list[tuple[int, tuple[int, int, int, int], float]] = []
-        """Areas kept from one robot: ``(robot, (r0, r1, c0, c1), until)``."""
+        self._barred: list[tuple[int, NDArray[np.int64], NDArray[np.int64], float]] = []
+        """Cells kept from one robot: ``(robot, rows, cols, until)``."""
+        self.strikes = np.zeros(shape, dtype=np.uint8)
+        """``(H, W) uint8`` how many aborted goals' areas each cell lay in (:meth:`strike`)."""
 
     def assign(self, i: int, goal: NDArray[np.integer], route: NDArray[np.int32]) -> None:
         """Robot i's goal and the targets after it."""
@@ -102,24 +104,51 @@ class GoalBook:
         r0, r1, c0, c1 = _box(goal, radius_cells)
         self.blacklist[r0:r1, c0:c1] = True
 
-    def bar(self, robot: int, goal: NDArray[np.integer], radius_cells: int, until: float) -> None:
-        """The square of half-side ``radius_cells`` around ``goal`` is kept from ``robot`` until ``until``."""
-        self._barred.append((robot, _box(goal, radius_cells), until))
+    def bar(
+        self,
+        robot: int,
+        goal: NDArray[np.integer],
+        radius_cells: int,
+        until: float,
+        cells: NDArray[np.integer] | None = None,
+    ) -> None:
+        """The square of half-side ``radius_cells`` around ``goal``, and ``cells`` (``(k, 2)``, e.g. the rest
+        of its cluster), are kept from ``robot`` until ``until``."""
+        r0, r1, c0, c1 = _box(goal, radius_cells)
+        h, w = self.blacklist.shape
+        rows, cols = np.mgrid[r0 : min(r1, h), c0 : min(c1, w)]
+        rows, cols = rows.ravel(), cols.ravel()
+        if cells is not None and len(cells):
+            rows = np.concatenate([rows, np.asarray(cells)[:, 0]])
+            cols = np.concatenate([cols, np.asarray(cells)[:, 1]])
+        self._barred.append((robot, rows.astype(np.int64), cols.astype(np.int64), until))
 
     def barred(self, robot: int, now: float) -> BoolGrid | None:
         """``(H, W) bool`` cells kept from ``robot`` at ``now`` (None: none)."""
-        self._barred = [b for b in self._barred if b[2] > now]
-        boxes = [box for i, box, _ in self._barred if i == robot]
-        if not boxes:
+        self._barred = [b for b in self._barred if b[3] > now]
+        mine = [(rows, cols) for i, rows, cols, _ in self._barred if i == robot]
+        if not mine:
             return None
         mask = np.zeros(self.blacklist.shape, dtype=bool)
-        for r0, r1, c0, c1 in boxes:
-            mask[r0:r1, c0:c1] = True
+        for rows, cols in mine:
+            mask[rows, cols] = True
         return mask
+
+    def strike(self, goal: NDArray[np.integer], radius_cells: int, limit: int) -> int:
+        """An aborted goal: one strike on the square of half-side ``radius_cells`` around it; a cell struck
+        ``limit`` times is blacklisted for the team for good (no robot could reach it however often it was
+        tried, as explore_lite's blacklist keeps a goal). Returns how many cells were newly blacklisted."""
+        r0, r1, c0, c1 = _box(goal, radius_cells)
+        box = self.strikes[r0:r1, c0:c1]
+        box[box < 255] += 1
+        newly = (box >= limit) & ~self.blacklist[r0:r1, c0:c1]
+        self.blacklist[r0:r1, c0:c1] |= newly
+        return int(newly.sum())
 
     def forget(self) -> None:
         """A restarted centre's memory: no blacklist, nothing barred."""
         self.blacklist = np.zeros(self.blacklist.shape, dtype=bool)
+        self.strikes = np.zeros(self.blacklist.shape, dtype=np.uint8)
         self._barred = []
 
     def current(self, i: int) -> NDArray[np.int32]:
