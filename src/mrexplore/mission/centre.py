@@ -47,7 +47,7 @@ from mrexplore.preprocessing.sparse_map import SparseFrontierMap
 from mrexplore.team.goal_book import GoalBook, decision_due
 from mrexplore.types import BoolGrid, CellState, MrExploreError
 
-__all__ = ["TeamPlanner", "NavState", "NO_ORACLE"]
+__all__ = ["TeamPlanner", "NavState", "NO_ORACLE", "warm_up"]
 
 STRIKES_TO_DROP = 3
 """Aborted goals whose areas overlap a cell before it is dropped for the whole team for good."""
@@ -273,3 +273,26 @@ class TeamPlanner:
     def free(self) -> BoolGrid:
         """``(H, W) bool`` free cells of the team map."""
         return self.team.state() == CellState.FREE
+
+
+def warm_up(strategy: ExplorationPipeline) -> None:
+    """Run one message in and one decision out on a small room, on a copy of ``strategy``: a node that does
+    this before it joins the team compiles its kernels (a minute or more on a fresh install) while nobody waits
+    for it, not in its first rounds, where the team would take the pause for a lost robot."""
+    import copy
+
+    from mrexplore.config import SensorConfig
+    from mrexplore.preprocessing.agents import RobotAgent
+
+    mine = copy.deepcopy(strategy)
+    planner = TeamPlanner(1, (16, 16), 0.1, mine, silence_rounds=3)
+    state = np.full((16, 16), CellState.UNKNOWN, np.uint8)
+    state[2:10, 2:10] = CellState.FREE
+    robot = RobotAgent(0, (16, 16), mine.preprocess, SensorConfig())
+    robot.sense_state(state)
+    out = robot.compose(0, (5, 5), robot.window())
+    for data in (out.full_bytes(), out.incremental()):
+        message = planner.read(data)
+        if message is not None:
+            planner.receive(message, 0)
+    planner.plan(0, now=0.0, force=True)

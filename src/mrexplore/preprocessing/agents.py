@@ -44,6 +44,16 @@ class RobotAgent:
         """The robot's grid, closed and coded, kept up to date where it changed."""
         self.sender = RobotSender(robot, shape)
 
+    @staticmethod
+    def warm_up(preprocess: PreprocessConfig) -> None:
+        """One message of a small room, both ways it is encoded: a robot node that does this before it joins
+        the team compiles its kernels while nobody waits for it."""
+        agent = RobotAgent(0, (16, 16), preprocess, SensorConfig())
+        state = np.full((16, 16), CellState.UNKNOWN, np.uint8)
+        state[2:10, 2:10] = CellState.FREE
+        agent.sense_state(state)
+        agent.compose(0, (5, 5), agent.window()).both()
+
     def sense(self, belief: Belief, free_count: NDArray[np.uint16] | None = None) -> None:
         """Bring the grid in line with the robot's belief (``free_count``: as :meth:`OnBoardGrid.update`)."""
         self.sender.note_changed(self.grid.update(belief, free_count))

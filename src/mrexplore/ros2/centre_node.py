@@ -267,8 +267,10 @@ class CentreNode:
 def run_centre_node(settings: CentreSettings, loopback: bool = True, ros_args: Sequence[str] = ()) -> str:
     """Start the centre's node and serve until the exploration ends or a signal (SIGINT, SIGTERM) stops it;
     returns why it ended. ``loopback``: keep DDS on this machine."""
+    from mrexplore.mission.centre import warm_up
     from mrexplore.ros2.robot_node import start_rclpy
 
+    warm_up(settings.strategy)  # kernels compiled before the team sees the centre
     rclpy = start_rclpy(loopback, ros_args)
     node = rclpy.create_node("mrexplore_centre")
     why = "interrupted"

@@ -265,6 +265,7 @@ def start_rclpy(loopback: bool = True, ros_args: Sequence[str] = ()) -> Any:
 def run_robot_node(settings: RobotNodeSettings, loopback: bool = True, ros_args: Sequence[str] = ()) -> None:
     """Start the robot's node and serve until interrupted (SIGINT or SIGTERM). ``loopback``: keep DDS on this
     machine; ``ros_args``: see :func:`start_rclpy`."""
+    RobotAgent.warm_up(settings.preprocess)  # kernels compiled before the team sees the robot
     rclpy = start_rclpy(loopback, ros_args)
     node = rclpy.create_node(f"mrexplore_{settings.name}")
 
