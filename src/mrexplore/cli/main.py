@@ -18,6 +18,7 @@ from typing import Any
 from mrexplore.cli.bench import add_bench, run_bench_command
 from mrexplore.cli.common import EXIT_BAD_INPUT, EXIT_INTERRUPTED, Parser
 from mrexplore.cli.explore import add_explore, run_explore
+from mrexplore.cli.maps import add_maps, run_maps
 from mrexplore.cli.report import add_report, run_report
 from mrexplore.cli.ros2 import add_ros2, run_ros2
 from mrexplore.cli.train import add_train, run_train
@@ -47,6 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     add_report(sub)
     add_ros2(sub)
+    add_maps(sub)
     return parser
 
 
@@ -73,6 +75,8 @@ def _run(args: argparse.Namespace, argv: list[str]) -> None:
         print(f"# {CONFIG_HEADER}\n" + config_yaml(RunConfig()), end="")
     elif args.command == "report":
         print(run_report(args, argv))
+    elif args.command == "maps":
+        print(run_maps(args))
     elif args.command == "ros2":
         said = run_ros2(args, argv)
         if said:

@@ -61,8 +61,9 @@ def load_map(spec: str | Path, cfg: MapConfig | None = None) -> GroundTruthMap:
     ----------
     spec:
         A ``.yaml`` (ROS map_server), an image (grayscale render or DungeonMaps RGB), a HouseExpo
-        ``.json``, ``generated:SEED`` for the built-in procedural floor plan, or ``varied:SEED`` for
-        one whose size, outline, rooms, corridor and clutter the seed draws too (the training plans).
+        ``.json``, ``generated:SEED`` for the built-in procedural floor plan, ``varied:SEED`` for
+        one whose size, outline, rooms, corridor and clutter the seed draws too (the training plans), or
+        ``example:NAME`` for a map shipped with the package (``mrexplore maps`` lists them).
     cfg:
         Working resolution and pixel size of images without YAML.
 
@@ -77,6 +78,10 @@ def load_map(spec: str | Path, cfg: MapConfig | None = None) -> GroundTruthMap:
     path = Path(text)
     if is_generator_spec(text):
         return _load_generated(text, cfg)
+    if text.startswith("example:") and not path.exists():  # a map shipped with the package
+        from mrexplore.maps.datasets import example_path
+
+        path = example_path(text.removeprefix("example:"))
     if not path.exists():
         raise MrExploreError(f"map file not found: {path}; pass an existing map file with --map")
     if path.is_dir():
