@@ -369,12 +369,17 @@ def _set_threads(threads: int) -> None:
 
 
 def expand_maps(items: Sequence[str]) -> list[str]:
-    """Map files from paths and folders (folders: every map file below, sorted; DungeonMaps' and KTH's
+    """Map files from paths, ``example:NAME`` and folders (folders: every map file below, sorted; DungeonMaps' and KTH's
     room-label images ``*_spaces.png`` and images that have a YAML beside them are skipped)."""
     out: list[str] = []
     for item in items:
         if is_generator_spec(item):
             out.append(item)
+            continue
+        if item.startswith("example:") and not Path(item).exists():  # a map shipped with the package
+            from mrexplore.maps.datasets import example_path
+
+            out.append(str(example_path(item.removeprefix("example:"))))
             continue
         p = Path(item)
         if p.is_dir():
