@@ -1,5 +1,5 @@
 """Pictures: frontiers stay visible on a large map, every frame carries its title, counter, legend and scale
-bar at one size, and a long mission's GIF is capped in frames."""
+bar at one size, a long mission's GIF is capped in frames, and the final picture is one a person reads."""
 
 from __future__ import annotations
 
@@ -9,7 +9,17 @@ from PIL import Image
 from mrexplore.config import MapConfig, MissionConfig, SimConfig
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import MissionSpec, run_mission
-from mrexplore.mission.render import FRONTIER_COLOURS, Caption, GifRecorder, framed, render_frame
+from mrexplore.mission.render import (
+    _ROBOT_COLOURS,
+    _TRUTH_WALL,
+    _UNKNOWN,
+    FRONTIER_COLOURS,
+    Caption,
+    GifRecorder,
+    _legend_items,
+    framed,
+    render_frame,
+)
 from mrexplore.pipeline import make_strategy
 from mrexplore.preprocessing.clustering import Clusters
 from mrexplore.types import CellState
@@ -49,3 +59,30 @@ def test_a_long_mission_s_gif_is_capped(tmp_path) -> None:
             g.seek(k)
             sizes.add(g.size)
     assert len(sizes) == 1
+
+
+def test_a_picture_a_person_reads(tmp_path) -> None:
+    # one legend entry per robot in well-separated colours, 900 px at least, the coverage as the text says it,
+    # no clusters once none are left, and a GIF of about ten seconds whatever the mission's length
+    truth = load_map("generated:1", MapConfig(resolution_m=0.2))
+    recorder = GifRecorder(title="plan")
+    spec = MissionSpec(truth, make_strategy("utility"), SimConfig(robots=3), MissionConfig(max_steps=80), seed=0)
+    run_mission(spec, observer=recorder, progress=False)
+    assert [label for _, label in _legend_items(False, 3)][:4] == ["robot 1", "robot 2", "robot 3", "its path"]
+    assert [label for _, label in _legend_items(False, 10)][7:9] == ["robot 8", "robots 9-10"]
+    colours = np.array(_ROBOT_COLOURS, float)
+    gaps = np.linalg.norm(colours[:, None] - colours[None], axis=-1)[np.triu_indices(len(colours), 1)]
+    assert gaps.min() > 60  # no two robots alike (red and magenta were 45 apart)
+    final = recorder.final_frame(clusters=False)
+    assert max(final.size) >= 900
+    px = np.asarray(final)[: final.height * 3 // 4]  # the map, above the legend
+    assert not np.all(px == FRONTIER_COLOURS[0], axis=-1).any()  # no frontier drawn
+    assert np.all(px == _UNKNOWN, axis=-1).any() or np.all(px == _TRUTH_WALL, axis=-1).any()
+    assert np.abs(np.array(_UNKNOWN, int) - np.array(_TRUTH_WALL, int)).min() >= 50  # two greys told apart
+    n = recorder.save_gif(tmp_path / "run.gif", progress=False)
+    with Image.open(tmp_path / "run.gif") as g:
+        total = 0
+        for k in range(g.n_frames):
+            g.seek(k)
+            total += g.info["duration"]
+    assert n >= 2 and 8000 <= total - 2000 <= 12000  # about 10 s, then the end held 2 s (equal frames merged)

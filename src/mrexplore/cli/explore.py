@@ -4,6 +4,7 @@ mission's flags, which ``ros2 sim`` and ``ros2 launch`` take too."""
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import TYPE_CHECKING, Any
 
 from mrexplore.cli.common import (
@@ -121,7 +122,7 @@ def run_explore(args: argparse.Namespace) -> dict[str, Any]:
     run, strategy, truth, starts = mission_setup(args)
     from mrexplore.maps.map_saver import save_ros_map
     from mrexplore.mission import MissionSpec, run_mission
-    from mrexplore.mission.render import GifRecorder, save_png
+    from mrexplore.mission.render import GIF_SECONDS, GifRecorder, save_png
 
     sim_cfg, mission_cfg = run.sim, run.mission
     recorder = None
@@ -133,10 +134,19 @@ def run_explore(args: argparse.Namespace) -> dict[str, Any]:
         observer=recorder,
         progress=args.progress,
     )
+    # A mission that ended for want of frontiers ends its pictures without the last decision's clusters.
+    clusters = result.measures.done_reason not in ("no_frontiers", "no_reachable_frontiers")
     if recorder is not None and args.gif:
-        recorder.save_gif(args.gif, progress=args.progress)
+        n = recorder.save_gif(args.gif, progress=args.progress, clusters=clusters)
+        print(
+            f"wrote {args.gif}: the mission in {n} frames, about {GIF_SECONDS:.0f} s and the end held 2 s",
+            file=sys.stderr,
+        )
     if recorder is not None and args.png:
-        save_png(recorder.final_frame(), args.png)
+        final = recorder.final_frame(clusters=clusters)
+        save_png(final, args.png)
+        print(f"wrote {args.png}: the final map, {final.width} x {final.height} px", file=sys.stderr)
     if args.save_map:
         save_ros_map(result.final_state, truth.frame, args.save_map)
+        print(f"wrote {args.save_map} and its image: the team's final map (ROS map_server)", file=sys.stderr)
     return mission_record(run, strategy, truth, args.seed, result.measures.to_dict(), result.starts_rc)

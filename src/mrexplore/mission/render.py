@@ -22,26 +22,31 @@ from mrexplore.types import CellState, MrExploreError, StateGrid
 
 __all__ = ["render_frame", "framed", "GifRecorder", "save_png", "scale_bar_m", "FRONTIER_COLOURS"]
 
-_UNKNOWN = (205, 205, 205)
-_TRUTH_WALL = (172, 172, 172)
+_UNKNOWN = (222, 222, 222)
+_TRUTH_WALL = (150, 150, 150)
+"""Unexplored space light, a wall not yet seen a clearly darker grey, an explored wall near black."""
 _FREE = (255, 255, 255)
 _OCCUPIED = (20, 20, 20)
 _FAILED = (128, 128, 128)
 _INK = (30, 30, 30)
 _ROBOT_COLOURS = [
-    (220, 50, 47),
-    (38, 139, 210),
-    (211, 54, 130),
-    (203, 75, 22),
-    (108, 113, 196),
+    (0, 114, 178),
+    (230, 159, 0),
+    (204, 121, 167),
+    (86, 180, 233),
+    (213, 94, 0),
+    (240, 228, 66),
     (140, 86, 75),
-    (181, 137, 0),
-    (0, 60, 130),
 ]
-"""Robots: no green among them, which is the frontiers' colour."""
+"""Robots: Okabe and Ito's colour-blind-safe palette without its bluish green (the frontiers' colour), and a
+brown; a team of more than seven repeats them."""
+_LEGEND_ROBOTS = 8
+"""A legend names at most this many robots one by one."""
 FRONTIER_COLOURS = [(0, 170, 0), (90, 220, 90), (0, 110, 50)]
 """Frontier clusters: three greens, neighbouring clusters told apart by shade."""
 _CENTRE = (0, 90, 0)
+GIF_SECONDS = 10.0
+"""A GIF plays the mission in about this long (its frames' duration adapts), then holds the end 2 s."""
 
 
 def _robot_colour(i: int) -> tuple[int, int, int]:
@@ -83,21 +88,23 @@ def render_frame(
     if scale != 1.0:
         size = (max(1, round(img.width * scale)), max(1, round(img.height * scale)))
         img = img.resize(size, Image.Resampling.BOX if scale < 1 else Image.Resampling.NEAREST)
-    rad = max(2.0, 3.0 * max(scale, 0.5))
+    # Markers readable on any picture: a hundredth of its long side at least.
+    rad = max(2.0, 3.0 * max(scale, 0.5), max(img.size) / 100)
+    line = max(1, round(scale), round(max(img.size) / 400))
     if clusters is not None and len(clusters):
         img = _paint_frontiers(img, clusters, scale)
     draw = ImageDraw.Draw(img)
     for i, trail in enumerate(trails):
         if len(trail) > 1:
             xy = [((c + 0.5) * scale, (r + 0.5) * scale) for r, c in np.asarray(trail)]
-            draw.line(xy, fill=_light(_robot_colour(i)), width=max(1, round(scale)))
+            draw.line(xy, fill=_light(_robot_colour(i)), width=line)
     if clusters is not None:
         for r, c in np.asarray(clusters.centers_rc):
             x, y = (c + 0.5) * scale, (r + 0.5) * scale
             draw.polygon([(x, y - rad), (x + rad, y), (x, y + rad), (x - rad, y)], fill=_CENTRE, outline=(0, 0, 0))
     for i, (r, c) in enumerate(np.asarray(goals_rc)):
         if r >= 0:
-            _cross(draw, (c + 0.5) * scale, (r + 0.5) * scale, rad, _robot_colour(i), 2)
+            _cross(draw, (c + 0.5) * scale, (r + 0.5) * scale, rad, _robot_colour(i), max(2, line))
     for i, (r, c) in enumerate(np.asarray(positions_rc)):
         x, y = (c + 0.5) * scale, (r + 0.5) * scale
         box = [x - rad, y - rad, x + rad, y + rad]
@@ -151,19 +158,23 @@ def scale_bar_m(metres_per_px: float, target_px: float) -> float:
 
 @dataclass(frozen=True)
 class Caption:
-    """What a frame says around its map: the title, the counter, the legend's fault entries."""
+    """What a frame says around its map: the title, the counter, the legend's fault entries and robots."""
 
     title: str
     step: int
     coverage: float
     faults: bool = False
+    robots: int = 1
 
 
 _PAD = 6
 
 
-def _legend_items(faults: bool) -> list[tuple[str, str]]:
-    items = [("robot", "robot"), ("path", "path"), ("goal", "goal"), ("frontier", "frontier cluster")]
+def _legend_items(faults: bool, robots: int = 1) -> list[tuple[str, str]]:
+    items = [(f"robot:{i}", f"robot {i + 1}") for i in range(min(robots, _LEGEND_ROBOTS))]
+    if robots > _LEGEND_ROBOTS:
+        items.append((f"robot:{_LEGEND_ROBOTS}", f"robots {_LEGEND_ROBOTS + 1}-{robots}"))
+    items += [("path", "its path"), ("goal", "its goal"), ("frontier", "frontier cluster")]
     items += [("centre", "cluster centre"), ("unknown", "unexplored"), ("free", "explored"), ("wall", "wall")]
     items += [("truth", "wall not yet seen")]
     if faults:
@@ -174,8 +185,9 @@ def _legend_items(faults: bool) -> list[tuple[str, str]]:
 def _swatch(draw: ImageDraw.ImageDraw, kind: str, x: float, y: float, s: float) -> None:
     """A legend symbol in the box ``(x, y)`` to ``(x + s, y + s)``."""
     cx, cy, rad = x + s / 2, y + s / 2, s / 2 - 1
-    if kind == "robot":
-        draw.ellipse([cx - rad, cy - rad, cx + rad, cy + rad], fill=_robot_colour(0), outline=(0, 0, 0))
+    if kind.startswith("robot:"):
+        colour = _robot_colour(int(kind.split(":")[1]))
+        draw.ellipse([cx - rad, cy - rad, cx + rad, cy + rad], fill=colour, outline=(0, 0, 0))
     elif kind == "path":
         draw.line([(x, cy), (x + s, cy)], fill=_light(_robot_colour(0)), width=3)
     elif kind == "goal":
@@ -198,31 +210,33 @@ def _swatch(draw: ImageDraw.ImageDraw, kind: str, x: float, y: float, s: float) 
 
 def framed(map_img: Image.Image, caption: Caption, metres_per_px: float) -> Image.Image:
     """``map_img`` with a header (title; step and coverage) above it and a legend and a scale bar below."""
-    big, small = _font(14), _font(12)
     width = max(map_img.width, 380)
+    unit = max(1.0, width / 600)  # text and symbols grow with the picture
+    big, small = _font(round(14 * unit)), _font(round(12 * unit))
     probe = ImageDraw.Draw(Image.new("RGB", (1, 1)))
 
     def text_w(text: str, font: ImageFont.FreeTypeFont | ImageFont.ImageFont) -> float:
         return probe.textlength(text, font=font)
 
     # legend rows, laid out left to right
-    s, gap = 12, 14
+    s, gap = round(12 * unit), round(14 * unit)
     rows: list[list[tuple[str, str, float]]] = [[]]
     x: float = _PAD
-    for kind, label in _legend_items(caption.faults):
+    for kind, label in _legend_items(caption.faults, caption.robots):
         w = s + 4 + text_w(label, small)
         if x + w > width - _PAD and rows[-1]:
             rows.append([])
             x = _PAD
         rows[-1].append((kind, label, x))
         x += w + gap
-    head_h, row_h = 40, 18
-    foot_h = _PAD + row_h * len(rows) + 26
+    head_h, row_h = round(40 * unit), round(18 * unit)
+    foot_h = _PAD + row_h * len(rows) + round(26 * unit)
     out = Image.new("RGB", (width, head_h + map_img.height + foot_h), (255, 255, 255))
     out.paste(map_img, ((width - map_img.width) // 2, head_h))
     draw = ImageDraw.Draw(out)
     draw.text((_PAD, 4), caption.title, fill=_INK, font=big)
-    draw.text((_PAD, 22), f"step {caption.step}   coverage {100 * caption.coverage:.1f}%", fill=_INK, font=small)
+    counter = f"step {caption.step}   coverage {100 * caption.coverage:.2f}%"  # as the text summary says it
+    draw.text((_PAD, round(22 * unit)), counter, fill=_INK, font=small)
     y = head_h + map_img.height + _PAD
     for row in rows:
         for kind, label, lx in row:
@@ -232,10 +246,10 @@ def framed(map_img: Image.Image, caption: Caption, metres_per_px: float) -> Imag
     # the scale bar: a round length near a quarter of the map's width
     metres = scale_bar_m(metres_per_px, max(20.0, map_img.width / 4))
     bar = metres / metres_per_px
-    y += 6
-    draw.rectangle([_PAD, y, _PAD + bar, y + 4], fill=_INK)
+    y += round(6 * unit)
+    draw.rectangle([_PAD, y, _PAD + bar, y + round(4 * unit)], fill=_INK)
     label = f"{metres:g} m"
-    draw.text((_PAD + bar + 6, y - 5), label, fill=_INK, font=small)
+    draw.text((_PAD + bar + 6, y - round(5 * unit)), label, fill=_INK, font=small)
     return out
 
 
@@ -279,43 +293,49 @@ class GifRecorder:
         side = max(self._last[0].truth.shape)
         return self.max_side / side if side > self.max_side else float(max(1, self.max_side // side))
 
-    def _frame(self, scale: float) -> Image.Image:
+    def _frame(self, scale: float, clusters: bool = True) -> Image.Image:
         assert self._last is not None
         sim, decision, goals, status = self._last
+        if not clusters:
+            decision = None
         state = merge_beliefs(sim.beliefs).state(sim.cfg.sensor)  # the team's raw knowledge
         trails = [np.asarray(t, dtype=np.int32) for t in self._trails]
-        clusters = decision.clusters if decision is not None else None
+        frontier_clusters = decision.clusters if decision is not None else None
         img = render_frame(
             sim.truth.occupied,
             state,
             sim.positions_rc,
             trails,
-            clusters,
+            frontier_clusters,
             goals,
             scale,
             failed=~sim.alive,
             unheard=~status.assignable,
         )
         title = self.title or f"{sim.truth.name}, {sim.n_robots} robots"
-        caption = Caption(title, sim.steps, sim.coverage, self.faults)
+        caption = Caption(title, sim.steps, sim.coverage, self.faults, sim.n_robots)
         return framed(img, caption, sim.truth.frame.resolution_m / scale)
 
-    def final_frame(self, min_side: int = 400) -> Image.Image:
-        """The last state at full resolution (enlarged for small maps)."""
+    def final_frame(self, min_side: int = 900, clusters: bool = True) -> Image.Image:
+        """The last state at full resolution, enlarged so that its long side has at least ``min_side`` pixels;
+        ``clusters=False`` leaves out the frontier clusters (a mission that ended for want of any)."""
         assert self._last is not None
         side = max(self._last[0].truth.shape)
-        return self._frame(scale=max(1.0, float(np.ceil(min_side / side))))
+        return self._frame(scale=max(1.0, min_side / side), clusters=clusters)
 
-    def save_gif(self, path: str | Path, frame_ms: int = 80, progress: bool | None = None) -> None:
-        """Write at most ``max_frames`` frames (plus the final state, held longer) as a looping GIF, with one
-        palette for all, showing progress."""
+    def save_gif(
+        self, path: str | Path, seconds: float = GIF_SECONDS, progress: bool | None = None, clusters: bool = True
+    ) -> int:
+        """Write at most ``max_frames`` frames as a looping GIF of about ``seconds`` whatever the mission's
+        length, then the final state held 2 s, with one palette for all, showing progress; returns the
+        number of frames."""
         if self._last is None:
             raise MrExploreError("no frames recorded; run a mission with the recorder as observer")
         keep = self.frames
         if len(keep) > self.max_frames:
             picks = np.linspace(0, len(keep) - 1, self.max_frames).round().astype(int)
             keep = [keep[i] for i in picks]
-        last = _coded(self._frame(self._gif_scale()))
+        last = _coded(self._frame(self._gif_scale(), clusters))
         frames = [f for f in keep if f.size == last.size] + [last]
         bar = Progress(len(frames), "writing GIF", "frames", progress)
 
@@ -324,10 +344,12 @@ class GifRecorder:
                 bar.update()
                 yield f
 
+        frame_ms = int(min(1000, max(40, round(seconds * 1000 / max(1, len(frames) - 1), -1))))
         durations = [frame_ms] * (len(frames) - 1) + [2000]
         _write(path, lambda p: frames[0].save(p, save_all=True, append_images=rest(), duration=durations, loop=0))
         bar.update()
         bar.close()
+        return len(frames)
 
 
 def _coded(frame: Image.Image) -> Image.Image:
