@@ -59,7 +59,7 @@ def test_no_baseline_bytes_leaves_the_grid_fields_out(capsys) -> None:
     assert (rec["bytes_grid"], rec["bytes_grid_zlib"], rec["bytes_grid_delta_zlib"]) == (None, None, None)
     assert rec["bytes_sparse"] is None  # the whole maps the other mode would have sent
     assert main(["explore", *FAST, "--no-baseline-bytes"]) == 0
-    assert "; grid not counted, zlib not counted; " in capsys.readouterr().out
+    assert "whole grids: not counted,\n    zlib-compressed not counted); " in capsys.readouterr().out
 
 
 def test_human_summary_and_pictures(tmp_path, capsys) -> None:

@@ -45,6 +45,11 @@ def test_table_time_projects_from_the_episodes_timed(bench_dir: Path, capsys: py
     out = capsys.readouterr().out
     assert out.startswith("1 maps, 4 episodes measured; projected for 4 seeds on 2 workers")
     assert "| utility | 4 |" in out
+    # strategies the folder never ran are named once, not listed as missing map by map
+    assert main(["report", "table-time", "--runs", str(bench_dir), "--strategies", "utility,coscan"]) == 0
+    out = capsys.readouterr().out
+    assert "not measured" not in out
+    assert out.rstrip().endswith("no episode of coscan in these folders: left out of the projection")
 
 
 def test_report_refuses_folders_without_rows(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -148,9 +148,9 @@ def team_ratio(folders: Sequence[Path], small: int, large: int, strategy: str) -
         est, lo, hi = paired_bootstrap(b, a)
         # paired_bootstrap gives % fewer steps than the small team; the ratio is 1 - that / 100.
         per = ", ".join(f"{y / x:.2f}" for x, y in zip(a, b, strict=True))
+        interval = f"[{1 - hi / 100:.3f}, {1 - lo / 100:.3f}]" if len(pairs) > 1 else "(n = 1, no interval)"
         lines.append(
-            f"| {label} | {sum(a) / len(a):,.1f} | {sum(b) / len(b):,.1f} | "
-            f"{1 - est / 100:.3f} [{1 - hi / 100:.3f}, {1 - lo / 100:.3f}] | {per} |"
+            f"| {label} | {sum(a) / len(a):,.1f} | {sum(b) / len(b):,.1f} | {1 - est / 100:.3f} {interval} | {per} |"
         )
     return "\n".join(lines) + "\n"
 
@@ -187,7 +187,11 @@ def table_time(folders: Sequence[Path], seeds: int, workers: int, strategies: Se
         if measured[s]
     ]
     lines += ["", f"projected: {total / workers / 60:.1f} minutes"]
-    missing = [f"{m} {s}" for m in maps for s in strategies if (m, s) not in walls]
+    # Only what the folders ran: a strategy no folder holds is named once, not listed map by map.
+    missing = [f"{m} {s}" for m in maps for s in strategies if measured[s] and (m, s) not in walls]
     if missing:
         lines.append(f"not measured (left out, so a lower bound): {', '.join(missing)}")
+    absent = [s for s in strategies if not measured[s]]
+    if absent:
+        lines.append(f"no episode of {', '.join(absent)} in these folders: left out of the projection")
     return "\n".join(lines) + "\n"

@@ -139,7 +139,8 @@ def paired_table(
                 [steps_of(a, metric) for a, _ in pairs], [steps_of(b, metric) for _, b in pairs]
             )
             cov = 100 * np.mean([float(a["coverage"]) - float(b["coverage"]) for a, b in pairs])
-            cells += [f"{est:+.1f} [{lo:+.1f}, {hi:+.1f}]", f"{cov:+.2f}", str(len(pairs))]
+            interval = f"[{lo:+.1f}, {hi:+.1f}]" if len(pairs) > 1 else "(n = 1, no interval)"
+            cells += [f"{est:+.1f} {interval}", f"{cov:+.2f}", str(len(pairs))]
         lines.append(f"| {g} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 

@@ -82,17 +82,19 @@ def summary(rec: dict[str, Any]) -> str:
     return "\n".join(
         [
             f"explored {rec['map']} with {rec['robots']} robots ({rec['strategy']}, seed {rec['seed']})",
-            f"  coverage {100 * rec['coverage']:.2f}% in {rec['steps']} steps "
-            f"(90% at {at('steps_to_90')}, 95% at {at('steps_to_95')}, 99% at {at('steps_to_99')})",
-            f"  driven: longest {rec['path_len_max_m']:.1f} m, team {rec['path_len_sum_m']:.1f} m; "
-            f"overlap {rec['overlap']:.2f}",
-            f"  {rec['decisions']} decisions, {rec['plan_ms_mean']:.1f} ms mean, {rec['plan_ms_p95']:.1f} ms p95; "
-            f"wall {rec['wall_s']:.1f} s; peak memory {rec['peak_mb']:.0f} MB; ended: {rec['done_reason']}",
-            f"  a robot's on-board work a round: {rec['onboard_ms_median']:.1f} ms median, "
+            f"  coverage {100 * rec['coverage']:.2f}% of the free space in {rec['steps']} steps "
+            f"(90% at step {at('steps_to_90')}, 95% at {at('steps_to_95')}, 99% at {at('steps_to_99')})",
+            f"  driven: the longest robot {rec['path_len_max_m']:.1f} m, the team {rec['path_len_sum_m']:.1f} m; "
+            f"overlap {rec['overlap']:.2f} (0: no cell seen twice)",
+            f"  the centre decided {rec['decisions']} times: {rec['plan_ms_mean']:.1f} ms mean, "
+            f"{rec['plan_ms_p95']:.1f} ms p95; wall {rec['wall_s']:.1f} s; peak memory {rec['peak_mb']:.0f} MB; "
+            f"ended: {rec['done_reason']}",
+            f"  each robot's own work a round, its map into its message: {rec['onboard_ms_median']:.1f} ms median, "
             f"{rec['onboard_ms_p95']:.1f} ms p95",
-            f"  sent over {rec['rounds']} rounds: sparse {_kb(rec['bytes_sparse'])}, delta "
-            f"{_kb(rec['bytes_sparse_delta'])}; grid {_kb(rec['bytes_grid'])}, zlib {_kb(rec['bytes_grid_zlib'])}; "
-            f"centre map IoU min {rec['reconstruction_iou_min']:.4f}",
+            f"  sent over {rec['rounds']} rounds: {_kb(rec['bytes_sparse_delta'])} of sparse frontier deltas "
+            f"(whole sparse maps: {_kb(rec['bytes_sparse'])}; whole grids: {_kb(rec['bytes_grid'])},",
+            f"    zlib-compressed {_kb(rec['bytes_grid_zlib'])}); the centre's map against the robots': "
+            f"IoU at least {rec['reconstruction_iou_min']:.4f} (1: exact)",
             *(
                 [
                     f"  faults: {rec['robots_failed']} robots failed, {rec['messages_lost']} of "
@@ -102,5 +104,6 @@ def summary(rec: dict[str, Any]) -> str:
                 if any(rec[k] for k in ("robots_failed", "messages_lost", "messages_resent", "centre_restarts"))
                 else []
             ),
+            "  (each figure in docs/usage.md, 'Reading the summary')",
         ]
     )
