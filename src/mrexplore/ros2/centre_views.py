@@ -74,6 +74,7 @@ def centre_status(centre: Any, heard: Flags = None, assignable: Flags = None) ->
         "aborts": planner.aborts,
         "goals_sent": centre.goals_sent,
         "goals_resent": sum(g.resent for g in centre.goals),
+        "goal_via": sorted({g.kind for g in centre.goals}),
         "paused": centre.paused,
         "lost": [centre.robots[i].name for i in sorted(centre.rounds.lost)],
         "finished": centre.finished or planner.done_reason,

@@ -70,6 +70,8 @@ def nav2_actions_available() -> bool:
 class TopicGoals:
     """Goals on ``goal_pose``, tracked through the action's status topic (module docstring)."""
 
+    kind = "topic"
+
     def __init__(self, node: Any, robot: RobotEntry, now: Callable[[], float], on_state: OnState, warn: Warn) -> None:
         from action_msgs.msg import GoalStatusArray
         from geometry_msgs.msg import PoseStamped
@@ -140,6 +142,8 @@ class TopicGoals:
 class ActionGoals:
     """Goals through Nav2's NavigateToPose action (module docstring)."""
 
+    kind = "action"
+
     def __init__(self, node: Any, robot: RobotEntry, now: Callable[[], float], on_state: OnState, warn: Warn) -> None:
         from nav2_msgs.action import NavigateToPose
         from rclpy.action import ActionClient
@@ -170,6 +174,7 @@ class ActionGoals:
             return  # a goal already replaced
         handle = future.result()
         if not handle.accepted:
+            self.node.get_logger().info(f"{self.robot.name}: Nav2 rejected the goal")
             self.on_state("aborted")
             return
         self._handle = handle
@@ -181,7 +186,10 @@ class ActionGoals:
 
         if generation != self._generation:
             return  # Nav2 aborted a goal the centre replaced: no abort of the new one
-        self.on_state("reached" if future.result().status == GoalStatus.STATUS_SUCCEEDED else "aborted")
+        status = future.result().status
+        if status != GoalStatus.STATUS_SUCCEEDED:
+            self.node.get_logger().info(f"{self.robot.name}: Nav2 ended the goal with status {status}")
+        self.on_state("reached" if status == GoalStatus.STATUS_SUCCEEDED else "aborted")
 
     def hold(self, x: float, y: float, yaw: float) -> None:
         """Stop: the running goal is cancelled."""

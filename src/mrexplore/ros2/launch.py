@@ -39,6 +39,8 @@ __all__ = ["launch_team", "TeamProcesses", "wire_summary", "merged_records"]
 
 _LAUNCH_ONLY = {"--json": 0, "--direct-maps": 0, "--keep-logs": 0}
 """launch's own flags (and how many values each takes), not passed on to the simulator."""
+_CENTRE_KEYS = ("decisions", "aborts", "goals_resent", "warnings", "lost", "finished", "goal_via")
+"""What launch's record shows of the centre's."""
 _SAY_EVERY_S = 5.0
 """How often the launcher says how far the simulation got."""
 _RESTART_AFTER_S = 1.0
@@ -229,7 +231,7 @@ def _launch_record(work: Path, sim_record: dict[str, Any], args: argparse.Namesp
         "lockstep": bool(args.lockstep),
         "map_mismatches": sim_record.get("map_mismatches"),
         "wire": wire_summary(centre["wire"]),
-        "centre": {k: centre.get(k) for k in ("decisions", "aborts", "goals_resent", "warnings", "lost", "finished")},
+        "centre": {k: centre.get(k) for k in _CENTRE_KEYS},
         "centres": len(records),
         "goals_sent": centre.get("goals_sent"),
         "goals_resent": centre.get("goals_resent"),

@@ -31,6 +31,7 @@ from mrexplore.maps.occupancy_grid import FrameOffset, grid_in_robot_frame, stat
 from mrexplore.mission import Mission
 from mrexplore.paths.astar import astar_path
 from mrexplore.ros2.deployment import RobotEntry
+from mrexplore.ros2.goals import nav2_actions_available
 from mrexplore.ros2.messages import grid_data, grid_message, odometry_message, pose_message
 from mrexplore.sim.belief import classify
 from mrexplore.team.nav_goals import ABORTED, EXECUTING, SUCCEEDED
@@ -99,8 +100,15 @@ class Nav2Double:
         self._maps = [node.create_publisher(OccupancyGrid, r.map_topic, latched) for r in robots]
         self._poses = [node.create_publisher(PoseWithCovarianceStamped, r.pose_topic, 10) for r in robots]
         self._odom = [node.create_publisher(Odometry, f"/{r.name}/odom", 10) for r in robots]
-        self._status = [node.create_publisher(GoalStatusArray, r.nav_status_topic, 10) for r in robots]
         self._GoalStatusArray = GoalStatusArray
+        self.actions: Any = None
+        """Where nav2_msgs imports: NavigateToPose action servers, which take the goal_pose goals too."""
+        if nav2_actions_available():
+            from mrexplore.ros2.nav2_action_double import ActionDouble
+
+            self.actions = ActionDouble(node, self)
+        else:
+            self._status = [node.create_publisher(GoalStatusArray, r.nav_status_topic, 10) for r in robots]
         for i, r in enumerate(robots):
             node.create_subscription(PoseStamped, r.goal_topic, lambda m, i=i: self.on_goal(i, m), 10)
         node.create_subscription(OccupancyGrid, "/mrexplore/map", self._on_team_map, latched)
@@ -111,11 +119,9 @@ class Nav2Double:
         """Goals aborted because no way to them was known (what the centre should read as aborts)."""
         self.preempted = 0
         """Goals aborted because a newer one replaced them."""
-        self.crossed = 0
-        """Aborts a new goal crossed: it came within ``CROSSED_S`` of the abort, sent before the abort was read."""
+        self.crossed = 0  # aborts a new goal crossed: it came within CROSSED_S, sent before the abort was read
         self._aborted_at: list[float | None] = [None] * n
-        self.expired = 0
-        """Terminal goals dropped from the status array after ``result_timeout_s``."""
+        self.expired = 0  # terminal goals dropped from the status array after result_timeout_s
 
     @staticmethod
     def _seconds(stamp: Any) -> float:
@@ -127,6 +133,9 @@ class Nav2Double:
         sim = self.mission.sim
         if not sim.alive[i]:
             return  # a failed robot's Nav2 answers nothing
+        if self.actions is not None:
+            self.actions.forward(i, msg)  # bt_navigator sends it to its own action server
+            return
         stamp = self.now()
         now_s = self._seconds(stamp)
         aborted = self._aborted_at[i]
@@ -137,20 +146,39 @@ class Nav2Double:
             if goal.status == EXECUTING:
                 goal.status, goal.ended_s = ABORTED, now_s  # preempted (SimpleActionServer::accept_pending_goal)
                 self.preempted += 1
-        x, y = self.offsets[i].to_team(float(msg.pose.position.x), float(msg.pose.position.y))
-        self._target[i] = self.frame.xy_to_rc((float(x), float(y)))
-        reachable = self.frame.contains(self._target[i]) and not self._lethal(i)
-        path = self._plan(i) if reachable else np.zeros((0, 2), np.int32)
-        sim.set_path(i, path)
-        goal = _Goal(os.urandom(16), stamp, now_s, EXECUTING if len(path) else ABORTED)
-        if not len(path):
+        reachable = self.begin(i, msg.pose)
+        goal = _Goal(os.urandom(16), stamp, now_s, EXECUTING if reachable else ABORTED)
+        if not reachable:
             goal.ended_s = self._aborted_at[i] = now_s
             self.aborts_caused += 1
         self.goals[i].append(goal)
         self._publish_status(i)
 
+    def begin(self, i: int, pose: Any) -> bool:
+        """Robot i sets off for ``pose`` (its map frame); False where its planner refuses it or finds no way."""
+        x, y = self.offsets[i].to_team(float(pose.position.x), float(pose.position.y))
+        self._target[i] = self.frame.xy_to_rc((float(x), float(y)))
+        reachable = self.frame.contains(self._target[i]) and not self._lethal(i)
+        path = self._plan(i) if reachable else np.zeros((0, 2), np.int32)
+        self.mission.sim.set_path(i, path)
+        return bool(len(path))
+
+    def progress(self, i: int, blocked: bool) -> int | None:
+        """After a step, robot i on its way: plans again where the way turned out blocked; ABORTED without a
+        way, SUCCEEDED at the end of its path, else None."""
+        sim = self.mission.sim
+        if blocked or sim.path_ahead_blocked(i):
+            path = self._plan(i)
+            sim.set_path(i, path)
+            if not len(path):
+                self.aborts_caused += 1
+                return ABORTED
+        elif sim.at_path_end(i):
+            return SUCCEEDED
+        return None
+
     def has_goal(self, i: int) -> bool:
-        return bool(self.goals[i])
+        return bool(self.goals[i]) or (self.actions is not None and self.actions.has_goal(i))
 
     def _own_map(self, i: int) -> NDArray[np.uint8]:
         belief = self.mission.sim.beliefs[i]
@@ -189,20 +217,19 @@ class Nav2Double:
     def after_step(self, blocked: NDArray[np.bool_]) -> None:
         """After a simulation step: plan again around what was just seen, abort without a way, succeed at the
         end of the path; the status goes out on each change and as terminal goals expire."""
+        if self.actions is not None:
+            self.actions.after_step(blocked)
+            return
         sim, now_s = self.mission.sim, self._seconds(self.now())
         for i in map(int, np.flatnonzero(sim.alive)):
             goal = self.goals[i][-1] if self.goals[i] else None
             changed = False
             if goal is not None and goal.status == EXECUTING:
-                if blocked[i] or sim.path_ahead_blocked(i):
-                    path = self._plan(i)
-                    sim.set_path(i, path)
-                    if not len(path):
-                        goal.status, goal.ended_s, changed = ABORTED, now_s, True
+                outcome = self.progress(i, bool(blocked[i]))
+                if outcome is not None:
+                    goal.status, goal.ended_s, changed = outcome, now_s, True
+                    if outcome == ABORTED:
                         self._aborted_at[i] = now_s
-                        self.aborts_caused += 1
-                elif sim.at_path_end(i):
-                    goal.status, goal.ended_s, changed = SUCCEEDED, now_s, True
             timeout = self.settings.result_timeout_s
             kept = [g for g in self.goals[i] if g.ended_s is None or now_s - g.ended_s < timeout]
             if changed or len(kept) < len(self.goals[i]):

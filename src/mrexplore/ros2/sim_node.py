@@ -281,9 +281,13 @@ def _run_real_time(rclpy: Any, node: Any, sim_node: SimNode) -> dict[str, Any]:
         "done_reason": _finished(sim_node.centre_status) or "max_steps",
         "robots_lost": int((~sim.alive).sum()),
         "starts_rc": sim_node.mission.starts_rc.tolist(),
-        "goals_received": sum(len(g) for g in double.goals) + double.expired,
+        "goals_received": sum(len(g) for g in double.goals) + double.expired + _action_goals(double),
         "aborts_caused": double.aborts_caused,
         "aborts_crossed": double.crossed,
         "preempted": double.preempted,
         "sim_seconds": clock.seconds(),
     }
+
+
+def _action_goals(double: Nav2Double) -> int:
+    return 0 if double.actions is None else int(double.actions.received)
