@@ -25,10 +25,12 @@ class RunFolder:
     Examples
     --------
     >>> import tempfile
-    >>> run = RunFolder(Path(tempfile.mkdtemp()) / "run", resume=False, minutes=None)
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> run = RunFolder(Path(tmp.name) / "run", resume=False, minutes=None)
     >>> run.save_state({"epoch": 3})
     >>> RunFolder(run.out, resume=True, minutes=None).load_state()
     {'epoch': 3}
+    >>> tmp.cleanup()
     """
 
     def __init__(
