@@ -231,3 +231,22 @@ def test_a_bar_ends_on_one_line_of_its_last_state() -> None:
     p.close()
     finals = [line for line in out.getvalue().replace("\r", "\n").splitlines() if "2/2" in line]
     assert len(finals) == 1 and out.getvalue().endswith("\n")
+
+
+def test_a_slow_start_does_not_stretch_every_estimate_after_it() -> None:
+    # The first 5 s made 5% (kernels compiling), then 5% a second: after a few lines, the time left follows
+    # the pace of the last lines, not the average since the start.
+    import io
+
+    from mrexplore.runtime.progress import Progress
+
+    clock = _Clock()
+    out = io.StringIO()
+    bar = Progress(100, "run", "%", None, stream=out, clock=clock)
+    for t, n in ((5.0, 5), (6.0, 10), (7.0, 15), (8.0, 20), (9.0, 25)):
+        clock.t = t
+        bar._next_line = 0.0  # a line at every update
+        bar.set(n)
+    lines = out.getvalue().splitlines()
+    assert lines[0] == "run: 5%, 5 s, about 1 min 35 s left"  # from the start: 5 s for 5%
+    assert lines[-1] == "run: 25%, 9 s, about 15 s left"  # the last lines' pace: 5% a second

@@ -205,8 +205,8 @@ def main() -> None:
                 p.wait(timeout=20)
             except subprocess.TimeoutExpired:
                 p.kill()
-        shutil.rmtree(work, ignore_errors=True)  # nothing left in the temporary folder
                 p.wait()
+        shutil.rmtree(work, ignore_errors=True)  # nothing left in the temporary folder
     print(json.dumps(result))
 
 

@@ -9,6 +9,7 @@ from dataclasses import replace
 from typing import Any
 
 from mrexplore.config import RunConfig, TrainConfig, config_to_dict
+from mrexplore.runtime.kernel_cache import compiled_this_run
 
 __all__ = ["mission_record", "strict_json", "summary", "launch_summary"]
 
@@ -102,6 +103,11 @@ def summary(rec: dict[str, Any]) -> str:
                     f"{rec['acks_lost']} acknowledgements lost, {rec['centre_restarts']} centre restarts"
                 ]
                 if any(rec[k] for k in ("robots_failed", "messages_lost", "messages_resent", "centre_restarts"))
+                else []
+            ),
+            *(
+                ["  this first run's times include compiling the kernels; later runs are faster"]
+                if compiled_this_run()
                 else []
             ),
             "  (each figure in docs/usage.md, 'Reading the summary')",

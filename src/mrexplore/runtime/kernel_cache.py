@@ -7,9 +7,10 @@ import os
 import sys
 from pathlib import Path
 
-__all__ = ["kernels_cached", "say_if_compiling", "COMPILING"]
+__all__ = ["kernels_cached", "say_if_compiling", "compiled_this_run", "COMPILING"]
 
-COMPILING = "compiling kernels, first run only (about a minute)"
+COMPILING = "compiling kernels, first run only (a minute or two on two cores; later runs load them at once)"
+_compiling = False
 _SENTINEL = "lidar.*.nbi"
 """The index numba writes beside the simulator's LiDAR kernels, which every mission compiles first."""
 
@@ -26,7 +27,15 @@ def kernels_cached() -> bool:
 
 def say_if_compiling(prog: str = "mrexplore") -> bool:
     """Print the one-line notice on stderr where the kernels are not cached yet; True where it did."""
+    global _compiling
     if kernels_cached():
         return False
     print(f"{prog}: {COMPILING}", file=sys.stderr, flush=True)
+    _compiling = True
     return True
+
+
+def compiled_this_run() -> bool:
+    """Whether this process found the kernels uncached (:func:`say_if_compiling`): its timings include
+    compiling them."""
+    return _compiling

@@ -32,6 +32,10 @@ def _duration(seconds: float) -> str:
     return f"{s // 3600} h {s % 3600 // 60:02d} min"
 
 
+_PACE_LINES = 4
+"""The time left is estimated from the pace over this many of the last lines (from the start before)."""
+
+
 class Progress:
     """``total`` units of work named ``desc``.
 
@@ -66,6 +70,9 @@ class Progress:
         self._lines = 0
         self._said = initial
         self._first = initial
+        self._seen: list[tuple[float, float]] = [(self._start, initial)]
+        """(time, progress) at each line: the time left is estimated from the last few lines' pace, so that a
+        slow start (a first run compiling its kernels) does not stretch every estimate after it."""
         self.detail = ""
         self.limit_s: float | None = None
         """A time budget (seconds from the start): the time left said is never beyond it."""
@@ -88,8 +95,12 @@ class Progress:
         pct = 100 * self.n / self.total if self.total else 100.0
         count = f"{pct:.0f}%" if self.unit == "%" else f"{self.n:g}/{self.total:g} {self.unit} ({pct:.0f}%)"
         text = f"{self.desc}: {count}, {_duration(elapsed)}"
+        self._seen = [*self._seen[-(_PACE_LINES - 1) :], (now, self.n)]
+        t0, paced = self._seen[0][0], self.n - self._seen[0][1]
         if done > 0 and self.n < self.total:
             left = elapsed / done * (self.total - self.n)
+            if len(self._seen) >= _PACE_LINES and paced > 0:
+                left = (now - t0) / paced * (self.total - self.n)
             if self.limit_s is not None:
                 left = max(0.0, min(left, self.limit_s - elapsed))
             text += f", about {_duration(left)} left"
