@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import heapq
-import importlib.util
 import math
 from pathlib import Path
 
@@ -57,10 +56,14 @@ def truth_map(text: str, resolution_m: float = 0.05, name: str = "ascii") -> Gro
     return GroundTruthMap(occ, GridFrame(occ.shape[0], occ.shape[1], resolution_m), name)
 
 
-requires_rclpy = pytest.mark.skipif(
-    importlib.util.find_spec("rclpy") is None,
-    reason="rclpy is not installed (pip install -e '.[ros2]'); CI installs it",
-)
+def _rclpy_problem() -> str | None:
+    from mrexplore.ros2.loopback import rclpy_problem
+
+    return rclpy_problem()
+
+
+_RCLPY = _rclpy_problem()
+requires_rclpy = pytest.mark.skipif(_RCLPY is not None, reason=f"{_RCLPY} (CI installs rclpy)")
 """Marks a test that needs ROS 2's rclpy (the ros2 extra)."""
 
 

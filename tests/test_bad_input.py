@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -364,3 +365,26 @@ def test_a_team_too_large_for_its_map_is_warned_about_once(capsys) -> None:
     assert len(warnings) == 1
     assert warnings[0].startswith("mrexplore: warning: map generated:0: 60 robots on ")
     assert warnings[0].endswith("m^2 each): most will wait in each other's way; 39 robots suit it")
+
+
+def test_a_ros2_of_another_distribution_sourced_in_the_shell_is_one_line(tmp_path: Path) -> None:
+    # A sourced ROS 2 built for another Python puts its rclpy first on PYTHONPATH; its import fails.
+    import subprocess
+    import sys
+
+    fake = tmp_path / "humble" / "rclpy"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text("from rclpy._rclpy_pybind11 import *  # built for Python 3.10\n")
+    env = {**os.environ, "PYTHONPATH": str(fake.parent), "ROS_DISTRO": "humble"}
+    out = subprocess.run(
+        [sys.executable, "-m", "mrexplore", "ros2", "robot", "--name", "r1", "--index", "0"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    line = out.stderr.strip()
+    assert line.startswith(f"mrexplore: error: rclpy at {fake / '__init__.py'} does not load in Python 3.")
+    assert "(ROS_DISTRO=humble is sourced): ModuleNotFoundError: No module named 'rclpy._rclpy_pybind11'" in line
+    assert line.endswith("; use a shell without that ROS 2 sourced, or one built for this Python")

@@ -188,7 +188,6 @@ def _deployment(args: argparse.Namespace, run: RunConfig) -> tuple[Any, Any]:
 
 
 def run_ros2(args: argparse.Namespace, argv: list[str]) -> str:
-    import importlib.util
 
     if args.ros2 == "params":  # plain data: no ROS needed
         from mrexplore.ros2.parameters import params_yaml
@@ -202,8 +201,11 @@ def run_ros2(args: argparse.Namespace, argv: list[str]) -> str:
         check_output(args.out, "--out")
         Path(args.out).write_text(text)
         return f"ROS 2 parameters written to {args.out}"
-    if importlib.util.find_spec("rclpy") is None:  # found, not imported: DDS settings must come first
-        raise MrExploreError("ROS 2 commands need rclpy; install it with: pip install -e '.[ros2]'")
+    from mrexplore.ros2.loopback import rclpy_problem
+
+    problem = rclpy_problem()  # checked in a child process: DDS settings must come before rclpy's import
+    if problem is not None:
+        raise MrExploreError(problem)
     if args.ros2 in ("sim", "launch"):
         return _ros2_sim(args, argv)
     run = run_config(args)

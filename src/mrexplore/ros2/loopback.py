@@ -88,3 +88,27 @@ def keep_on_loopback(domain_id: int | None = None) -> dict[str, str]:
     }
     os.environ.update(env)
     return env
+
+
+def rclpy_problem() -> str | None:
+    """Why rclpy cannot be used here, in one line (None: it can). Checked in a child process, so that this
+    process has imported no DDS yet: a ROS 2 of another distribution sourced in the shell puts its own rclpy,
+    built for another Python, ahead of the one installed with mrexplore."""
+    import importlib.util
+    import subprocess
+    import sys
+
+    spec = importlib.util.find_spec("rclpy")
+    if spec is None:
+        return "ROS 2 commands need rclpy; install it with: pip install -e '.[ros2]'"
+    probe = subprocess.run([sys.executable, "-c", "import rclpy"], capture_output=True, text=True)
+    if probe.returncode == 0:
+        return None
+    where = spec.origin or "?"
+    distro = os.environ.get("ROS_DISTRO")
+    last = probe.stderr.strip().splitlines()[-1] if probe.stderr.strip() else f"exit {probe.returncode}"
+    sourced = f" (ROS_DISTRO={distro} is sourced)" if distro else ""
+    return (
+        f"rclpy at {where} does not load in Python {sys.version_info.major}.{sys.version_info.minor}{sourced}: "
+        f"{last}; use a shell without that ROS 2 sourced, or one built for this Python"
+    )
