@@ -100,3 +100,18 @@ def seeded_dijkstra(passable: np.ndarray, seeds: list[tuple[int, int, float]]) -
                     dist[rr, cc] = nd
                     heapq.heappush(heap, (nd, (rr, cc)))
     return dist
+
+
+_SLOW_LIST = Path(__file__).with_name("slow_tests.txt")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Mark slow the test functions tests/slow_tests.txt names (measured over about 0.8 s each), so that
+    ``pytest -m "not slow"`` stays a quick subset."""
+    slow = {line.strip() for line in _SLOW_LIST.read_text().splitlines() if line.strip() and not line.startswith("#")}
+    root = Path(config.rootpath)
+    for item in items:
+        path = Path(str(item.path)).resolve()
+        rel = path.relative_to(root).as_posix() if path.is_relative_to(root) else path.as_posix()
+        if f"{rel}::{getattr(item, 'originalname', item.name)}" in slow:
+            item.add_marker(pytest.mark.slow)

@@ -259,7 +259,7 @@ def test_gif_frames_draw_failed_and_unheard_robots() -> None:
         unheard=np.array([False, False, True]),
     )
     px = np.asarray(img)
-    assert tuple(px[55, 55]) == (220, 50, 47)  # robot 0 filled in its colour
+    assert tuple(px[55, 55]) == (0, 114, 178)  # robot 0 filled in its colour
     assert tuple(px[55, 155]) == (128, 128, 128)  # robot 1 failed: grey (crossed out through its centre)
     assert tuple(px[145, 105]) == (255, 255, 255)  # robot 2 not heard: a ring, its centre unfilled
 
