@@ -250,3 +250,22 @@ def test_a_slow_start_does_not_stretch_every_estimate_after_it() -> None:
     lines = out.getvalue().splitlines()
     assert lines[0] == "run: 5%, 5 s, about 1 min 35 s left"  # from the start: 5 s for 5%
     assert lines[-1] == "run: 25%, 9 s, about 15 s left"  # the last lines' pace: 5% a second
+
+
+def test_no_estimate_while_the_kernels_compile(monkeypatch) -> None:
+    # A first run's first lines are compile time: no estimate until the last lines give a pace.
+    import io
+
+    from mrexplore.runtime import kernel_cache
+    from mrexplore.runtime.progress import Progress
+
+    monkeypatch.setattr(kernel_cache, "_compiling", True)
+    clock, out = _Clock(), io.StringIO()
+    bar = Progress(100, "run", "%", None, stream=out, clock=clock)
+    for t, n in ((26.0, 11), (27.0, 16), (28.0, 21), (29.0, 26)):
+        clock.t = t
+        bar._next_line = 0.0
+        bar.set(n)
+    lines = out.getvalue().splitlines()
+    assert lines[0] == "run: 11%, 26 s, no estimate while the kernels compile"
+    assert lines[-1] == "run: 26%, 29 s, about 15 s left"  # 5% a second over the last lines

@@ -10,6 +10,8 @@ from typing import TextIO
 
 from tqdm import tqdm
 
+from mrexplore.runtime.kernel_cache import compiled_this_run
+
 __all__ = ["Progress", "LINE_EVERY_S"]
 
 LINE_EVERY_S = 5.0
@@ -97,9 +99,12 @@ class Progress:
         text = f"{self.desc}: {count}, {_duration(elapsed)}"
         self._seen = [*self._seen[-(_PACE_LINES - 1) :], (now, self.n)]
         t0, paced = self._seen[0][0], self.n - self._seen[0][1]
-        if done > 0 and self.n < self.total:
+        paced_enough = len(self._seen) >= _PACE_LINES and paced > 0
+        if done > 0 and self.n < self.total and not paced_enough and compiled_this_run():
+            text += ", no estimate while the kernels compile"  # the pace so far says nothing of the rest
+        elif done > 0 and self.n < self.total:
             left = elapsed / done * (self.total - self.n)
-            if len(self._seen) >= _PACE_LINES and paced > 0:
+            if paced_enough:
                 left = (now - t0) / paced * (self.total - self.n)
             if self.limit_s is not None:
                 left = max(0.0, min(left, self.limit_s - elapsed))
