@@ -95,8 +95,9 @@ class TopicGoals:
 
     def _publish(self, x: float, y: float, yaw: float) -> None:
         self._last = (x, y, yaw)
-        if self._pub.get_subscription_count() == 0:
-            self._held = True  # nobody listens yet (a centre just started): sent once somebody does
+        # The count includes the centre's own watcher of the topic (watch_goal_topic): one is nobody else.
+        if self._pub.get_subscription_count() <= 1:
+            self._held = True  # Nav2 does not listen yet (a centre just started): sent once it does
             return
         self._held = False
         stamp = self.node.get_clock().now().to_msg()
