@@ -1,4 +1,4 @@
-"""Whether numba's compiled kernels are cached yet: the first run compiles them (about a minute on two
+"""Whether numba's compiled kernels are cached yet: the first run compiles them (a minute or two on two
 cores) and says so, later runs load them in a moment."""
 
 from __future__ import annotations
