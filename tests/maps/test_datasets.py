@@ -79,7 +79,7 @@ def test_research_data_is_never_fetched_and_the_listing_says_where_to_get_it(cap
     out = capsys.readouterr().out
     assert out.startswith("shipped with mrexplore (--map example:NAME): basement_hallways_5cm, complex_img_43")
     assert "  get it:  mrexplore maps get dungeon --dest DIR" in out
-    assert datasets.DATASETS["kth"].shipped_by_us is False
+    assert not datasets.DATASETS["kth"].files and not datasets.DATASETS["kth"].shipped  # research data
 
 
 def test_the_dev_dungeon_maps_come_from_a_local_copy(tmp_path: Path) -> None:

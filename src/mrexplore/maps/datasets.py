@@ -8,8 +8,8 @@ Examples
 ['dungeon', 'houseexpo', 'kth', 'ros']
 >>> example_path("complex_img_43").name
 'complex_img_43.png'
->>> len(DATASETS["dungeon"].files), DATASETS["houseexpo"].shipped_by_us
-(30, False)
+>>> len(DATASETS["dungeon"].files), len(DATASETS["houseexpo"].files)  # research data: never fetched
+(30, 0)
 """
 
 from __future__ import annotations
@@ -53,9 +53,7 @@ class Dataset:
     files: tuple[DataFile, ...] = field(default=())
     """What ``mrexplore maps get`` fetches (empty: it fetches nothing, and says where to get it)."""
     shipped: tuple[str, ...] = ()
-    """Its files that ship with the package as examples."""
-    shipped_by_us: bool = True
-    """Whether its licence lets the package redistribute it."""
+    """Its files that ship with the package as examples (none where its licence does not allow it)."""
 
 
 def _dungeon_files() -> tuple[DataFile, ...]:
@@ -102,13 +100,11 @@ DATASETS = {
         "HouseExpo: 35,126 floor plans as JSON (metres), built on SUNCG",
         "research use only (the layouts come from SUNCG); the repository's code is MIT",
         "github.com/TeaganLi/HouseExpo (its HouseExpo/json.tar.gz); read with --map FILE.json",
-        shipped_by_us=False,
     ),
     "kth": Dataset(
         "KTH campus floor plans (Aydemir et al.), as MapEx prepared them",
         "research data (no terms stated for the KTH floor plans); MapEx's code is Clear BSD",
         "github.com/castacks/MapEx, kth_test_maps/ (occ_map.npy: save it as a PNG with a map_server YAML)",
-        shipped_by_us=False,
     ),
 }
 """Every dataset by name."""

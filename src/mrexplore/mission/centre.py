@@ -44,7 +44,7 @@ from numpy.typing import NDArray
 from mrexplore.pipeline import Decision, DecisionInput, ExplorationPipeline
 from mrexplore.preprocessing.agents import TeamCentre
 from mrexplore.preprocessing.sparse_map import SparseFrontierMap
-from mrexplore.team.goal_book import GoalBook, decision_due
+from mrexplore.team.goal_book import GoalBook, KeepsGoals, decision_due
 from mrexplore.types import BoolGrid, CellState, MrExploreError
 
 __all__ = ["TeamPlanner", "NavState", "NO_ORACLE", "warm_up"]
@@ -64,7 +64,7 @@ class NavState:
     ABORTED = "aborted"
 
 
-class TeamPlanner:
+class TeamPlanner(KeepsGoals):
     """The centre's work between the messages in and the goals out (module docstring).
 
     Parameters
@@ -148,16 +148,6 @@ class TeamPlanner:
             # Whether it stayed a frontier shows in the robot's first map sent after it got there: checked then.
             self._reached.append((robot, goal.copy(), self.team.last_heard[robot]))
             self._drop(robot)
-
-    @property
-    def goals(self) -> NDArray[np.int32]:
-        """``(n_robots, 2) int32`` each robot's goal in the team grid ((-1, -1): none)."""
-        return self.book.goals
-
-    @property
-    def routes(self) -> list[NDArray[np.int32]]:
-        """Each robot's targets after its goal (the local layer's route)."""
-        return self.book.routes
 
     def _cluster_of(self, goal: NDArray[np.integer]) -> NDArray[np.int32] | None:
         """The members of the last decision's cluster that holds ``goal`` (None: none does)."""

@@ -46,7 +46,7 @@ from mrexplore.sim.belief import classify
 from mrexplore.sim.measures import EpisodeMeasures, lower_bound_steps
 from mrexplore.sim.starts import draw_starts
 from mrexplore.sim.world import ExplorationSim, StepResult
-from mrexplore.team.goal_book import GoalBook
+from mrexplore.team.goal_book import GoalBook, KeepsGoals, decision_due
 from mrexplore.types import BoolGrid, CellState, MrExploreError
 
 __all__ = [
@@ -189,7 +189,7 @@ _NOT_COPIED = ("spec", "strategy", "observer", "_bar", "truth", "centre")
 """Shared, read-only during a mission (the ground truth) or owned by the caller: never snapshotted."""
 
 
-class Mission:
+class Mission(KeepsGoals):
     """One exploration mission that can be stepped decision by decision.
 
     The one replanning loop of the package: :func:`run_mission`, the trainer's rollouts, the lookahead
@@ -319,16 +319,6 @@ class Mission:
 
     # -- the loop ---------------------------------------------------------------------------------------
     @property
-    def goals(self) -> NDArray[np.int32]:
-        """``(n_robots, 2) int32`` each robot's goal ((-1, -1): none)."""
-        return self.book.goals
-
-    @property
-    def routes(self) -> list[NDArray[np.int32]]:
-        """Each robot's targets after its goal."""
-        return self.book.routes
-
-    @property
     def blacklist(self) -> BoolGrid:
         """``(H, W) bool`` cells no robot is sent to again."""
         return self.book.blacklist
@@ -354,7 +344,7 @@ class Mission:
         """The replanning events (module docstring); moves robots on along their routes on the way."""
         sim, goals, cfg = self.sim, self.goals, self.mission_cfg
         frontier_goals = self.strategy.goals_are_frontiers
-        need = sim.steps - self.last_decision_step >= cfg.replan_every_steps
+        need = decision_due(sim.steps, self.last_decision_step, cfg.replan_every_steps, asked=False)
         in_range = self._in_range()
         for i in range(sim.n_robots):
             if not sim.alive[i]:

@@ -15,6 +15,7 @@ from PIL import Image, ImageDraw, ImageFont
 from mrexplore.pipeline import Decision
 from mrexplore.preprocessing.clustering import Clusters
 from mrexplore.preprocessing.transmission import LinkStatus
+from mrexplore.runtime.colours import ROBOT_COLOURS, robot_colour
 from mrexplore.runtime.progress import Progress
 from mrexplore.sim.belief import merge_beliefs
 from mrexplore.sim.world import ExplorationSim
@@ -29,17 +30,8 @@ _FREE = (255, 255, 255)
 _OCCUPIED = (20, 20, 20)
 _FAILED = (128, 128, 128)
 _INK = (30, 30, 30)
-_ROBOT_COLOURS = [
-    (0, 114, 178),
-    (230, 159, 0),
-    (204, 121, 167),
-    (86, 180, 233),
-    (213, 94, 0),
-    (240, 228, 66),
-    (140, 86, 75),
-]
-"""Robots: Okabe and Ito's colour-blind-safe palette without its bluish green (the frontiers' colour), and a
-brown; a team of more than seven repeats them."""
+_ROBOT_COLOURS = list(ROBOT_COLOURS)
+"""Robots (:mod:`~mrexplore.runtime.colours`, as the RViz markers draw them)."""
 _LEGEND_ROBOTS = 8
 """A legend names at most this many robots one by one."""
 FRONTIER_COLOURS = [(0, 170, 0), (90, 220, 90), (0, 110, 50)]
@@ -49,8 +41,7 @@ GIF_SECONDS = 10.0
 """A GIF plays the mission in about this long (its frames' duration adapts), then holds the end 2 s."""
 
 
-def _robot_colour(i: int) -> tuple[int, int, int]:
-    return _ROBOT_COLOURS[i % len(_ROBOT_COLOURS)]
+_robot_colour = robot_colour
 
 
 def _font(size: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:

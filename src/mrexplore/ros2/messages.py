@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 
 from mrexplore.maps.frame import GridFrame
 from mrexplore.maps.occupancy_grid import OccupancyGridData, occupancy_values, yaw_of
+from mrexplore.runtime.colours import ROBOT_COLOURS as PICTURE_COLOURS
 from mrexplore.types import StateGrid
 
 if TYPE_CHECKING:  # the message packages come with the ros2 extra; imported where a message is built
@@ -35,17 +36,8 @@ __all__ = [
     "ROBOT_COLOURS",
 ]
 
-ROBOT_COLOURS = (
-    (0.12, 0.47, 0.71),
-    (1.0, 0.5, 0.05),
-    (0.17, 0.63, 0.17),
-    (0.84, 0.15, 0.16),
-    (0.58, 0.4, 0.74),
-    (0.55, 0.34, 0.29),
-    (0.89, 0.47, 0.76),
-    (0.5, 0.5, 0.5),
-)
-"""One colour per robot (matplotlib's tab10), as in the package's pictures."""
+ROBOT_COLOURS = tuple(tuple(v / 255 for v in c) for c in PICTURE_COLOURS)
+"""One colour per robot, 0-1 RGB, the package's pictures' (:mod:`~mrexplore.runtime.colours`)."""
 
 
 def grid_data(msg: OccupancyGrid) -> OccupancyGridData:

@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 
 from mrexplore.types import BoolGrid
 
-__all__ = ["GoalBook", "NO_GOAL", "NO_ROUTE", "decision_due"]
+__all__ = ["GoalBook", "KeepsGoals", "NO_GOAL", "NO_ROUTE", "decision_due"]
 
 NO_GOAL = np.array([-1, -1], dtype=np.int32)
 """``(2,) int32`` the goal cell of a robot without one."""
@@ -154,6 +154,22 @@ class GoalBook:
     def current(self, i: int) -> NDArray[np.int32]:
         """Robot i's goal followed by its route, ``(k, 2) int32`` (empty without a goal)."""
         return np.vstack([self.goals[i : i + 1], self.routes[i]]) if self.goals[i, 0] >= 0 else NO_ROUTE
+
+
+class KeepsGoals:
+    """What keeps its team's goals in a :class:`GoalBook` (``self.book``) shows them as its own."""
+
+    book: GoalBook
+
+    @property
+    def goals(self) -> NDArray[np.int32]:
+        """``(n_robots, 2) int32`` each robot's goal in the team grid ((-1, -1): none)."""
+        return self.book.goals
+
+    @property
+    def routes(self) -> list[NDArray[np.int32]]:
+        """Each robot's targets after its goal (the local layer's route)."""
+        return self.book.routes
 
 
 def decision_due(now: float, last: float, replan: float, asked: bool) -> bool:

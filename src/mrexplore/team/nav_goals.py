@@ -90,11 +90,6 @@ class GoalTracker:
         self.sends += 1
         self.last_send = now
 
-    def cleared(self) -> None:
-        """The centre dropped the goal (it holds none now)."""
-        self._forget_copies()
-        self.copies, self.sends, self.state = {}, 0, None
-
     def due_to_resend(self, now: float) -> bool:
         """Whether the goal should go out again: sent, no copy listed yet, ``resend_after`` passed."""
         return self.sends > 0 and not self.copies and now - self.last_send >= self.resend_after
@@ -129,7 +124,3 @@ class GoalTracker:
             return None
         self.state = state
         return state
-
-    def ids(self) -> set[bytes]:
-        """Every id this tracker has placed (earlier goals' and the current one's copies)."""
-        return self.known | set(self.copies)
