@@ -87,6 +87,18 @@ class GlobalPlanningConfig(Checked):
     teams of 2-5; with a lone robot it won nothing measurable on the training's validation maps (+2.0%
     [-1.3, +5.3] fewer steps than the heuristic with the 6 m sensor, +0.6% [-2.5, +3.6] with 8 m) and lost
     on held-out DungeonMaps (docs/learned.md). 1: the residual for every team."""
+    plan_service_weight: float = 0.0
+    """``hier-plan``: the time a team plan counts for exploring a cluster once there, in metres of driving per
+    metre of its frontier (members x resolution). 0, chosen on 32 validation maps of training against 0.2,
+    0.5 and 1.5 (docs/learned.md, "A team plan")."""
+    plan_sum_weight: float = 0.0
+    """``hier-plan``: the team plan minimises its makespan plus this times the total of its routes' costs (0:
+    the total only between plans of equal makespan; 0.1, 0.3 and 1 measured no better on the validation
+    maps)."""
+    plan_weight: float = 0.3
+    """``hier-plan``: the learned cost of sending robot i to cluster k grows by this times ``distance_weight``
+    per metre by which heading there first lengthens the team plan's makespan. 0.3, chosen on 32 validation
+    maps of training at 2, 3 and 8 robots against 1 and 3 (docs/learned.md, "A team plan")."""
     far_above_cells: int = 2_000_000
     """Once the known passable cells' bounding box holds more cells than this, robot distances are exact
     only within ``exact_radius_m`` and estimated beyond it on a grid of ``coarse_cell_m`` blocks
@@ -115,6 +127,9 @@ class GlobalPlanningConfig(Checked):
         "path_weight": Interval(-100, 100),
         "commitment": Interval(0, 1, none="the strategy's default"),
         "learned_min_robots": at_least(1),
+        "plan_service_weight": non_negative(),
+        "plan_sum_weight": non_negative(),
+        "plan_weight": non_negative(),
         "far_above_cells": non_negative(),
         "exact_radius_m": positive("metres"),
         "coarse_cell_m": positive("metres"),

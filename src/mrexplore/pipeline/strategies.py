@@ -21,6 +21,8 @@ __all__ = [
     "utility",
     "hier_heuristic",
     "hier_predict_heuristic",
+    "hier_plan",
+    "team_plan",
     "hier",
     "hier_predict",
     "ncm",
@@ -64,6 +66,31 @@ def hier_heuristic(c: PipelineConfigs, policy: str | None) -> ExplorationPipelin
     return ExplorationPipeline(
         "hier-heuristic", UtilityPlanner(c.global_), c.preprocess, router, commitment, distances=c.global_
     )
+
+
+def team_plan(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
+    # The paper's layers 1 and 3 with a team plan as the global layer: every robot's route through the
+    # clusters minimising the team's makespan, each robot sent to its route's first cluster.
+    from mrexplore.global_planning.team_plan import TeamPlanPlanner
+
+    router = LocalRouter(c.local, c.preprocess)
+    commitment = _commitment(c.global_, 1.0)
+    return ExplorationPipeline(
+        "team-plan", TeamPlanPlanner(c.global_), c.preprocess, router, commitment, distances=c.global_
+    )
+
+
+def hier_plan(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
+    # hier's learned cost plus what each choice costs the team plan's makespan, Hungarian decoding.
+    from mrexplore.global_planning.learned.policy import LearnedPlanner
+    from mrexplore.global_planning.team_plan import PlanCostPlanner
+
+    net, info = _loaded_policy("hier", policy)
+    learned = LearnedPlanner(net, c.global_, min_robots=c.global_.learned_min_robots)
+    router = LocalRouter(c.local, c.preprocess)
+    commitment = _commitment(c.global_, 1.0)
+    planner = PlanCostPlanner(learned, c.global_, "learned-plan")
+    return ExplorationPipeline("hier-plan", planner, c.preprocess, router, commitment, policy=info, distances=c.global_)
 
 
 def loaded_predictor(predictor: str | None) -> tuple[Any, dict[str, str]]:
