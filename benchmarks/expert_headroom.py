@@ -15,6 +15,8 @@ nearest's and noisy utility assignments) forward over the training horizon and t
 the team knows at the decision, every cell it has not observed a wall, and each is scored by the steps
 until no frontier is left (the horizon where that takes longer); ties go to the heuristic's own choice.
 Such an expert sees nothing a robot team could not, so what it gains a planner could gain at run time.
+``--baselines search,...`` adds that search over few candidates (hier's, team-plan's, hier-plan's and
+utility's assignments, hier deciding in the rollouts): what a run-time search of that kind would keep.
 
 ``--world predicted`` runs the candidates forward in the world the map predictor completes (the shipped one,
 or ``--predictor FILE``): seen cells as they are, unseen ones a wall where the prediction says so; each is
@@ -32,11 +34,14 @@ from pathlib import Path
 
 import numpy as np
 from _common import run_script
+from numpy.typing import NDArray
 
 from mrexplore.bench.report import paired_bootstrap
 from mrexplore.bench.runner import size_class
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig, TrainConfig
-from mrexplore.global_planning.protocol import Assignment
+from mrexplore.global_planning.classical import UtilityPlanner
+from mrexplore.global_planning.protocol import Assignment, AssignmentProblem, GlobalPlanner
+from mrexplore.global_planning.team_plan import PlanCostPlanner, TeamPlanPlanner
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec
 from mrexplore.pipeline import make_strategy
@@ -53,6 +58,21 @@ MAPS = maps_dir()
 
 
 EXPERT = "expert"
+SEARCH = "search"
+"""The seen-world search over few candidates: hier's own, team-plan's, hier-plan's and utility's assignments,
+run forward with hier deciding (``--baselines search,...``; ``--world known`` only)."""
+
+
+def search_candidates(problem: AssignmentProblem, learned: GlobalPlanner) -> list[NDArray[np.int64]]:
+    """Distinct assignments: the learned planner's first (ties go to it), then the team plan's, the learned
+    cost under the plan's and utility's."""
+    cfg = GlobalPlanningConfig()
+    planners = (learned, TeamPlanPlanner(cfg), PlanCostPlanner(learned, cfg), UtilityPlanner(cfg))
+    unique: dict[tuple[int, ...], NDArray[np.int64]] = {}
+    for planner in planners:
+        a = planner.assign(problem).cluster_of_robot
+        unique.setdefault(tuple(int(v) for v in a), np.asarray(a, dtype=np.int64))
+    return list(unique.values())
 
 
 def episode(args: tuple[str, int, int, str, str, str | None]) -> dict[str, object]:
@@ -62,14 +82,24 @@ def episode(args: tuple[str, int, int, str, str, str | None]) -> dict[str, objec
     predictor = load_predictor(predictor_file) if world == "predicted" else None
     cfg = TrainConfig()
     truth = load_map(path, MapConfig(resolution_m=cfg.episodes.resolution_m))
-    pipeline = make_strategy("hier-heuristic" if who == EXPERT else who)
+    pipeline = make_strategy({EXPERT: "hier-heuristic", SEARCH: "hier"}.get(who, who))
     m = Mission(
         MissionSpec(truth, pipeline, SimConfig(robots=robots), MissionConfig(max_steps=2000), seed), progress=False
     )
     rng = np.random.default_rng(seed)
     lookahead = known_world_returns if world == "known" else lookahead_returns
-    while who != EXPERT and m.advance():
+    while who not in (EXPERT, SEARCH) and m.advance():
         m.decide()
+    while who == SEARCH and m.advance():
+        problem = m.pose()
+        if problem is None:
+            break
+        cands = search_candidates(problem, pipeline.planner)
+        choice = Assignment(cands[0])
+        if len(cands) > 1:
+            returns = known_world_returns(m, cands, cfg.horizon_steps, pipeline.planner)
+            choice = Assignment(cands[int(np.argmax(returns))])
+        m.commit(choice)
     while who == EXPERT and m.advance():
         problem = m.pose()
         if problem is None:
@@ -111,7 +141,7 @@ def _classes(name: str, rows: list[dict[str, object]]) -> dict[str, list[str]]:
 
 def report(name: str, rows: list[dict[str, object]], baselines: list[str], robots: int) -> None:
     """Per class: each strategy's mean steps, and the expert's paired gain on each, with its interval."""
-    steps = {(str(r["map"]), int(r["seed"]), str(r["who"])): float(r["steps"]) for r in rows}  # type: ignore[arg-type]
+    steps = {(str(r["map"]), int(str(r["seed"])), str(r["who"])): float(str(r["steps"])) for r in rows}
     for cls, maps in _classes(name, rows).items():
         keys = sorted({(m, s) for (m, s, _) in steps if m in maps})
         keys = [k for k in keys if all((*k, w) in steps for w in (EXPERT, *baselines))]
@@ -133,7 +163,9 @@ def main() -> int:
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--datasets", default="houseexpo,dungeon", help="comma-separated: houseexpo, dungeon")
-    ap.add_argument("--baselines", default="hier-heuristic", help="comma-separated strategies run alone")
+    ap.add_argument(
+        "--baselines", default="hier-heuristic", help=f"comma-separated strategies run alone, or {SEARCH!r}"
+    )
     ap.add_argument("--rows", type=Path, default=None, help="JSON lines of finished episodes, read and appended")
     ap.add_argument(
         "--world", choices=("truth", "known", "predicted"), default="truth", help="where candidates run forward"

@@ -4,9 +4,11 @@ team's makespan (when the last known frontier is reached), and each robot sent t
 This is the min-max open multi-vehicle routing problem (each robot starts where it stands and ends anywhere),
 solved by a small heuristic written here rather than by OR-Tools' routing solver: min-max cheapest insertion,
 then local search (a cluster moved to any place of any route, two clusters of two routes swapped, a piece of
-one route reversed) while the makespan falls, or the total falls at an equal makespan. On the instances a
-decision poses (tens of clusters, 2-8 robots) it finishes in about a millisecond; OR-Tools' solver pays
-milliseconds per call to build its model before it searches (``benchmarks/team_plan.py`` compares both).
+one route reversed) while the makespan falls, or the total falls at an equal makespan. It decides in
+milliseconds, OR-Tools in hundreds of them to seconds: on random instances of 3 robots and 20 clusters it took
+0.2 ms against OR-Tools' 238 ms to its local optimum (whose makespans were 2.6% longer), and of 8 robots and 60
+clusters 2 ms against 5.1 s (8.4% shorter there); OR-Tools' guided local search cut at 100 ms ended 13% and
+4.6 times longer (``benchmarks/team_plan.py``). A decision has milliseconds, so the small heuristic it is.
 """
 
 from __future__ import annotations
@@ -492,5 +494,5 @@ class PlanCostPlanner:
         if problem.n_clusters == 0:
             return Assignment(np.full(problem.n_robots, UNASSIGNED, dtype=np.int64))
         plan = self.planner.last_plan = self.planner.plan(problem)
-        extra = self.cfg.plan_weight * self.cfg.distance_weight * plan.first_regret
-        return Assignment(match_min_cost(cost + np.where(np.isfinite(cost), extra, 0.0)))
+        regret = np.where(np.isfinite(plan.first_regret), plan.first_regret, 0.0)  # inf only where cost is
+        return Assignment(match_min_cost(cost + self.cfg.plan_weight * self.cfg.distance_weight * regret))
