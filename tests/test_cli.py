@@ -66,14 +66,14 @@ def test_human_summary_and_pictures(tmp_path, capsys) -> None:
     gif, png = tmp_path / "run.gif", tmp_path / "final.png"
     assert main(["explore", *FAST, "--gif", str(gif), "--png", str(png)]) == 0
     out = capsys.readouterr().out
-    assert out.startswith("explored generated:3 with 2 robots (hier, seed 0)")
+    assert out.startswith("explored generated:3 with 2 robots (hier-plan-nolocal, seed 0)")
     with Image.open(gif) as g:
         assert g.n_frames > 3
     assert Image.open(png).size[0] >= 400
 
 
 def test_no_local_switch(capsys) -> None:
-    assert main(["explore", *FAST, "--json", "--no-local"]) == 0
+    assert main(["explore", *FAST, "--strategy", "hier", "--json", "--no-local"]) == 0
     rec = json.loads(capsys.readouterr().out)
     assert rec["strategy"] == "hier-nolocal" and rec["config"]["strategy"]["local"] is None
 
@@ -98,8 +98,8 @@ def test_given_starts(capsys) -> None:
         (
             ["--strategy", "greedy"],
             "mrexplore: error: unknown strategy 'greedy'; choose one of "
-            "hier, hier-heuristic, hier-predict-heuristic, hier-predict, nearest, utility, coscan, ncm, ncm-sampled, "
-            "ncm-matched, oracle",
+            "hier, hier-heuristic, hier-predict-heuristic, hier-predict, hier-plan, team-plan, nearest, utility, "
+            "coscan, ncm, ncm-sampled, ncm-matched, oracle",
         ),
         (
             ["--start", "0.01,0.01"],
@@ -277,7 +277,7 @@ def test_naming_the_strategies_imports_none_of_them() -> None:
     """The registry holds each strategy's factory by its import path: listing and checking names imports no
     pipeline (the command line checks a name before any work)."""
     out = subprocess.run([sys.executable, "-c", NAMES], capture_output=True, text=True, timeout=60, check=True)
-    assert out.stdout.strip() == "11 hier []"
+    assert out.stdout.strip() == "13 hier []"
 
 
 LIGHT = """

@@ -88,7 +88,7 @@ def generate_launch_description():
         ("shared_map", "False", "True: the robots localise on one map (AMCL); False: one SLAM map per robot"),
         ("params_file", os.path.join(share, "config", "mrexplore.yaml"), "the team's grid and timing"),
         ("deployment", "", "a deployment file for each robot's topics and frames (optional)"),
-        ("strategy", "hier", "the planner: hier (learned, default), utility, nearest, coscan, ncm"),
+        ("strategy", "hier-plan-nolocal", "the planner: hier-plan-nolocal (default), hier, utility, nearest, coscan"),
         ("use_rviz", "True", "start RViz with the team map, the frontiers and each robot's goal"),
         ("rviz_config", os.path.join(share, "rviz", "mrexplore.rviz"), "RViz configuration"),
     ]

@@ -35,7 +35,9 @@ __all__ = [
 
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
-DEFAULT_STRATEGY = "hier"
+DEFAULT_STRATEGY = "hier-plan-nolocal"
+"""The learned global cost under the team plan's, no local layer: it took fewer steps than ``hier`` on the
+training's validation maps with 2, 3 and 8 robots and loses to it in no dev-set class (docs/learned.md)."""
 POLICY_HELP = (
     "weights of the learned strategies (hier, ncm), written by 'mrexplore train': FILE, or KIND=FILE pairs "
     "(hier=A.npz,ncm=B.npz) where a run has both (default: the shipped policies)"
