@@ -140,20 +140,26 @@ def _classes(name: str, rows: list[dict[str, object]]) -> dict[str, list[str]]:
 
 
 def report(name: str, rows: list[dict[str, object]], baselines: list[str], robots: int) -> None:
-    """Per class: each strategy's mean steps, and the expert's paired gain on each, with its interval."""
+    """Per class: each strategy's mean steps, and the expert's paired gain on each (and the search's, where it
+    ran), with its interval."""
     steps = {(str(r["map"]), int(str(r["seed"])), str(r["who"])): float(str(r["steps"])) for r in rows}
     for cls, maps in _classes(name, rows).items():
         keys = sorted({(m, s) for (m, s, _) in steps if m in maps})
         keys = [k for k in keys if all((*k, w) in steps for w in (EXPERT, *baselines))]
         if not keys:
             continue
-        exp = [steps[(*k, EXPERT)] for k in keys]
-        print(f"{cls}, {robots} robots: {len(keys)} episodes, expert {np.mean(exp):.1f} steps")
-        for b in baselines:
-            base = [steps[(*k, b)] for k in keys]
-            est, lo, hi = paired_bootstrap(exp, base)
-            better = sum(e < x for e, x in zip(exp, base, strict=True))
-            print(f"  against {b} ({np.mean(base):.1f}): {est:+.1f}% fewer [{lo:+.1f}, {hi:+.1f}], better in {better}")
+        for focus in (EXPERT, *(b for b in baselines if b == SEARCH)):
+            mine = [steps[(*k, focus)] for k in keys]
+            print(f"{cls}, {robots} robots: {len(keys)} episodes, {focus} {np.mean(mine):.1f} steps")
+            for b in (EXPERT, *baselines):
+                if b == focus:
+                    continue
+                base = [steps[(*k, b)] for k in keys]
+                est, lo, hi = paired_bootstrap(mine, base)
+                better = sum(e < x for e, x in zip(mine, base, strict=True))
+                print(
+                    f"  against {b} ({np.mean(base):.1f}): {est:+.1f}% fewer [{lo:+.1f}, {hi:+.1f}], better in {better}"
+                )
 
 
 def main() -> int:
