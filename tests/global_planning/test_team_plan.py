@@ -147,3 +147,13 @@ def test_plan_cost_follows_the_plan_when_it_weighs_enough() -> None:
         0,
         2,
     ]
+
+
+def test_hier_plan_at_weight_zero_decides_as_hier() -> None:
+    from mrexplore.pipeline import make_strategy
+
+    hier = make_strategy("hier").planner
+    plan = make_strategy("hier-plan", GlobalPlanningConfig(plan_weight=0.0)).planner
+    for seed in range(20):
+        problem = random_problem(np.random.default_rng(seed))
+        assert plan.assign(problem).cluster_of_robot.tolist() == hier.assign(problem).cluster_of_robot.tolist()

@@ -88,13 +88,13 @@ class GlobalPlanningConfig(Checked):
     [-1.3, +5.3] fewer steps than the heuristic with the 6 m sensor, +0.6% [-2.5, +3.6] with 8 m) and lost
     on held-out DungeonMaps (docs/learned.md). 1: the residual for every team."""
     plan_service_weight: float = 0.0
-    """``hier-plan``: the time a team plan counts for exploring a cluster once there, in metres of driving per
-    metre of its frontier (members x resolution). 0, chosen on 32 validation maps of training against 0.2,
-    0.5 and 1.5 (docs/learned.md, "A team plan")."""
+    """``team-plan`` and ``hier-plan``: the time the team plan counts for exploring a cluster once there, in
+    metres of driving per metre of its frontier (members x resolution). 0, chosen on 32 validation maps of
+    training against 0.2, 0.5 and 1.5 (docs/learned.md, "A team plan")."""
     plan_sum_weight: float = 0.0
-    """``hier-plan``: the team plan minimises its makespan plus this times the total of its routes' costs (0:
-    the total only between plans of equal makespan; 0.1, 0.3 and 1 measured no better on the validation
-    maps)."""
+    """``team-plan`` and ``hier-plan``: the plan minimises its makespan plus this times the total of its
+    routes' costs (0: the total only between plans of equal makespan; 0.1, 0.3 and 1 measured no better on
+    the validation maps)."""
     plan_weight: float = 0.3
     """``hier-plan``: the learned cost of sending robot i to cluster k grows by this times ``distance_weight``
     per metre by which heading there first lengthens the team plan's makespan. 0.3, chosen on 32 validation

@@ -474,8 +474,8 @@ class TeamPlanPlanner:
 class PlanCostPlanner:
     """A planner's own Hungarian cost plus what each choice costs the team plan: robot i to cluster k costs
     ``plan_weight * distance_weight`` per metre by which heading there first lengthens the plan's makespan
-    (:attr:`TeamPlan.first_regret`). ``base`` is a planner with a ``_cost(problem) -> (inputs, cost)``
-    (the learned one) or None (explore_lite's utility cost)."""
+    (:attr:`TeamPlan.first_regret`). ``base``: the learned planner, whose deterministic cost is added to, or
+    None (explore_lite's utility cost)."""
 
     base: LearnedPlanner | None
     cfg: GlobalPlanningConfig = field(default_factory=GlobalPlanningConfig)
@@ -490,9 +490,9 @@ class PlanCostPlanner:
             self.base.begin(state, resolution_m)
 
     def assign(self, problem: AssignmentProblem) -> Assignment:
-        cost = utility_cost(problem, self.cfg) if self.base is None else self.base._cost(problem)[1]
         if problem.n_clusters == 0:
             return Assignment(np.full(problem.n_robots, UNASSIGNED, dtype=np.int64))
+        cost = utility_cost(problem, self.cfg) if self.base is None else self.base.cost(problem)
         plan = self.planner.last_plan = self.planner.plan(problem)
         regret = np.where(np.isfinite(plan.first_regret), plan.first_regret, 0.0)  # inf only where cost is
         return Assignment(match_min_cost(cost + self.cfg.plan_weight * self.cfg.distance_weight * regret))

@@ -86,11 +86,16 @@ def hier_plan(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
     from mrexplore.global_planning.team_plan import PlanCostPlanner
 
     net, info = _loaded_policy("hier", policy)
-    learned = LearnedPlanner(net, c.global_, min_robots=c.global_.learned_min_robots)
+    predictor, predictor_info = loaded_predictor(c.predictor) if net.cfg.reads_prediction else (None, None)
+    learned = LearnedPlanner(net, c.global_, predictor=predictor, min_robots=c.global_.learned_min_robots)
     router = LocalRouter(c.local, c.preprocess)
     commitment = _commitment(c.global_, 1.0)
     planner = PlanCostPlanner(learned, c.global_, "learned-plan")
-    return ExplorationPipeline("hier-plan", planner, c.preprocess, router, commitment, policy=info, distances=c.global_)
+    pipeline = ExplorationPipeline(
+        "hier-plan", planner, c.preprocess, router, commitment, policy=info, distances=c.global_
+    )
+    pipeline.predictor = predictor_info  # a policy that reads the predicted gain: the predictor it ran
+    return pipeline
 
 
 def loaded_predictor(predictor: str | None) -> tuple[Any, dict[str, str]]:

@@ -181,6 +181,11 @@ class LearnedPlanner:
         g, cost = self._cost(problem)
         return g, -cost / self.net.cfg.base_scale
 
+    def cost(self, problem: AssignmentProblem) -> NDArray[np.float64]:
+        """The Hungarian cost ``(R, C) float64`` the deterministic decoding minimises (``inf`` where
+        unreachable): what other costs can be added to before matching."""
+        return self._cost(problem)[1]
+
     def _cost(self, problem: AssignmentProblem) -> tuple[GraphInputs, NDArray[np.float64]]:
         """The affinity in cost form, ``cost - base_scale * residual`` (``inf`` where unreachable)."""
         g, cost = self._inputs(problem)
