@@ -40,6 +40,7 @@ from mrexplore.bench.report import paired_bootstrap
 from mrexplore.bench.runner import size_class
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig, TrainConfig
 from mrexplore.global_planning.classical import UtilityPlanner
+from mrexplore.global_planning.learned.policy import LearnedPlanner
 from mrexplore.global_planning.protocol import Assignment, AssignmentProblem, GlobalPlanner
 from mrexplore.global_planning.team_plan import PlanCostPlanner, TeamPlanPlanner
 from mrexplore.maps.loaders import load_map
@@ -63,11 +64,12 @@ SEARCH = "search"
 run forward with hier deciding (``--baselines search,...``; ``--world known`` only)."""
 
 
-def search_candidates(problem: AssignmentProblem, learned: GlobalPlanner) -> list[NDArray[np.int64]]:
+def search_candidates(problem: AssignmentProblem, learned: LearnedPlanner) -> list[NDArray[np.int64]]:
     """Distinct assignments: the learned planner's first (ties go to it), then the team plan's, the learned
     cost under the plan's and utility's."""
     cfg = GlobalPlanningConfig()
-    planners = (learned, TeamPlanPlanner(cfg), PlanCostPlanner(learned, cfg), UtilityPlanner(cfg))
+    plan, plan_cost = TeamPlanPlanner(cfg), PlanCostPlanner(learned, cfg)
+    planners: tuple[GlobalPlanner, ...] = (learned, plan, plan_cost, UtilityPlanner(cfg))
     unique: dict[tuple[int, ...], NDArray[np.int64]] = {}
     for planner in planners:
         a = planner.assign(problem).cluster_of_robot
@@ -94,6 +96,7 @@ def episode(args: tuple[str, int, int, str, str, str | None]) -> dict[str, objec
         problem = m.pose()
         if problem is None:
             break
+        assert isinstance(pipeline.planner, LearnedPlanner)
         cands = search_candidates(problem, pipeline.planner)
         choice = Assignment(cands[0])
         if len(cands) > 1:

@@ -26,7 +26,7 @@ def mrexplore(*args: str) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-@pytest.mark.parametrize("strategy", ["utility", "hier"])
+@pytest.mark.parametrize("strategy", ["utility", "hier", "hier-plan-nolocal"])
 def test_lockstep_through_ros2_equals_explore(strategy: str) -> None:
     alone = mrexplore("explore", *MAP, "--strategy", strategy)
     launched = mrexplore("ros2", "launch", *MAP, "--strategy", strategy, "--lockstep")
