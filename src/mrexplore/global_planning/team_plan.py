@@ -8,7 +8,8 @@ one route reversed) while the makespan falls, or the total falls at an equal mak
 milliseconds, OR-Tools in hundreds of them to seconds: on random instances of 3 robots and 20 clusters it took
 0.2 ms against OR-Tools' 238 ms to its local optimum (whose makespans were 2.6% longer), and of 8 robots and 60
 clusters 2 ms against 5.1 s (8.4% shorter there); OR-Tools' guided local search cut at 100 ms ended 13% and
-4.6 times longer (``benchmarks/team_plan.py``). A decision has milliseconds, so the small heuristic it is.
+4.6 times longer (``benchmarks/team_plan.py``, both solvers side by side on the 2-core development machine,
+ours compiled first). A decision has milliseconds, so the small heuristic it is.
 """
 
 from __future__ import annotations
@@ -452,15 +453,18 @@ class TeamPlanPlanner:
     last_plan: TeamPlan | None = field(default=None, repr=False)
 
     def plan(self, problem: AssignmentProblem) -> TeamPlan:
+        """The team plan of ``problem`` (kept as :attr:`last_plan`)."""
         res = problem.resolution_m
         service = self.cfg.plan_service_weight * problem.clusters.sizes.astype(np.float64) * res
-        return plan_routes(problem.dist_m, problem.cluster_dist_cells * res, service, self.cfg.plan_sum_weight)
+        plan = plan_routes(problem.dist_m, problem.cluster_dist_cells * res, service, self.cfg.plan_sum_weight)
+        self.last_plan = plan
+        return plan
 
     def assign(self, problem: AssignmentProblem) -> Assignment:
         out = np.full(problem.n_robots, UNASSIGNED, dtype=np.int64)
         if problem.n_clusters == 0:
             return Assignment(out)
-        plan = self.last_plan = self.plan(problem)
+        plan = self.plan(problem)
         d = problem.dist_cells
         for i, route in enumerate(plan.routes):
             if len(route):
@@ -493,6 +497,6 @@ class PlanCostPlanner:
         if problem.n_clusters == 0:
             return Assignment(np.full(problem.n_robots, UNASSIGNED, dtype=np.int64))
         cost = utility_cost(problem, self.cfg) if self.base is None else self.base.cost(problem)
-        plan = self.planner.last_plan = self.planner.plan(problem)
+        plan = self.planner.plan(problem)
         regret = np.where(np.isfinite(plan.first_regret), plan.first_regret, 0.0)  # inf only where cost is
         return Assignment(match_min_cost(cost + self.cfg.plan_weight * self.cfg.distance_weight * regret))

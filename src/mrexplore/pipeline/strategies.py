@@ -81,20 +81,15 @@ def team_plan(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
 
 
 def hier_plan(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
-    # hier's learned cost plus what each choice costs the team plan's makespan, Hungarian decoding.
+    # hier, its learned cost plus what each choice costs the team plan's makespan, Hungarian decoding.
     from mrexplore.global_planning.learned.policy import LearnedPlanner
     from mrexplore.global_planning.team_plan import PlanCostPlanner
 
-    net, info = _loaded_policy("hier", policy)
-    predictor, predictor_info = loaded_predictor(c.predictor) if net.cfg.reads_prediction else (None, None)
-    learned = LearnedPlanner(net, c.global_, predictor=predictor, min_robots=c.global_.learned_min_robots)
-    router = LocalRouter(c.local, c.preprocess)
-    commitment = _commitment(c.global_, 1.0)
-    planner = PlanCostPlanner(learned, c.global_, "learned-plan")
-    pipeline = ExplorationPipeline(
-        "hier-plan", planner, c.preprocess, router, commitment, policy=info, distances=c.global_
-    )
-    pipeline.predictor = predictor_info  # a policy that reads the predicted gain: the predictor it ran
+    pipeline = hier(c, policy)
+    learned = pipeline.planner
+    assert isinstance(learned, LearnedPlanner)
+    pipeline.name = "hier-plan"
+    pipeline.planner = PlanCostPlanner(learned, c.global_, "learned-plan")
     return pipeline
 
 
