@@ -98,8 +98,8 @@ def test_given_starts(capsys) -> None:
         (
             ["--strategy", "greedy"],
             "mrexplore: error: unknown strategy 'greedy'; choose one of "
-            "hier, hier-heuristic, hier-predict-heuristic, hier-predict, hier-plan, team-plan, nearest, utility, "
-            "coscan, ncm, ncm-sampled, ncm-matched, oracle",
+            "hier, hier-heuristic, hier-predict-heuristic, hier-predict, hier-plan, team-plan, hier-search, nearest, "
+            "utility, coscan, ncm, ncm-sampled, ncm-matched, oracle",
         ),
         (
             ["--start", "0.01,0.01"],
@@ -277,7 +277,7 @@ def test_naming_the_strategies_imports_none_of_them() -> None:
     """The registry holds each strategy's factory by its import path: listing and checking names imports no
     pipeline (the command line checks a name before any work)."""
     out = subprocess.run([sys.executable, "-c", NAMES], capture_output=True, text=True, timeout=60, check=True)
-    assert out.stdout.strip() == "13 hier []"
+    assert out.stdout.strip() == "14 hier []"
 
 
 LIGHT = """

@@ -177,9 +177,8 @@ def test_bench_refuses_unknown_strategy(tmp_path, capsys) -> None:
     assert main(["bench", "--maps", "generated:2", "--strategies", "coscan2", "--out", str(tmp_path)]) == 2
     assert (
         capsys.readouterr().err == "mrexplore: error: unknown strategy 'coscan2'; choose one of "
-        "hier, hier-heuristic, hier-predict-heuristic, hier-predict, hier-plan, team-plan, nearest, utility, coscan, "
-        "ncm, ncm-sampled, "
-        "ncm-matched, oracle\n"
+        "hier, hier-heuristic, hier-predict-heuristic, hier-predict, hier-plan, team-plan, hier-search, nearest, "
+        "utility, coscan, ncm, ncm-sampled, ncm-matched, oracle\n"
     )
 
 

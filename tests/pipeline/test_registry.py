@@ -11,8 +11,8 @@ from mrexplore.types import MrExploreError
 
 def test_the_shipped_strategies_in_their_order() -> None:
     assert strategy_names() == [
-        "hier", "hier-heuristic", "hier-predict-heuristic", "hier-predict", "hier-plan", "team-plan", "nearest",
-        "utility", "coscan", "ncm", "ncm-sampled", "ncm-matched", "oracle",
+        "hier", "hier-heuristic", "hier-predict-heuristic", "hier-predict", "hier-plan", "team-plan", "hier-search",
+        "nearest", "utility", "coscan", "ncm", "ncm-sampled", "ncm-matched", "oracle",
     ]  # fmt: skip
     assert [strategy_spec(n).policy_kind for n in ("hier", "hier-nolocal", "ncm-matched", "utility")] == [
         "hier",

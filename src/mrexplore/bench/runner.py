@@ -150,6 +150,7 @@ _ADDED_LATER: tuple[tuple[str, str, object], ...] = (
     ("global_planning", "plan_service_weight", 0.0),  # the team plan's settings change no other strategy
     ("global_planning", "plan_sum_weight", 0.0),
     ("global_planning", "plan_weight", 0.3),
+    ("global_planning", "search_horizon_steps", 400),
 )
 """Settings added after benches were kept, as (section, key, value): at that value, which gives the results
 of before, a setting is left out of the hash, so those benches' rows keep theirs."""

@@ -99,6 +99,9 @@ class GlobalPlanningConfig(Checked):
     """``hier-plan``: the learned cost of sending robot i to cluster k grows by this times ``distance_weight``
     per metre by which heading there first lengthens the team plan's makespan. 0.3, chosen on 32 validation
     maps of training at 2, 3 and 8 robots against 1 and 3 (docs/learned.md, "A team plan")."""
+    search_horizon_steps: int = 400
+    """``hier-search``: each candidate's rollout runs at most this many simulation steps (a rollout that leaves
+    frontiers at its end scores the whole budget)."""
     far_above_cells: int = 2_000_000
     """Once the known passable cells' bounding box holds more cells than this, robot distances are exact
     only within ``exact_radius_m`` and estimated beyond it on a grid of ``coarse_cell_m`` blocks
@@ -130,6 +133,7 @@ class GlobalPlanningConfig(Checked):
         "plan_service_weight": non_negative(),
         "plan_sum_weight": non_negative(),
         "plan_weight": non_negative(),
+        "search_horizon_steps": at_least(1),
         "far_above_cells": non_negative(),
         "exact_radius_m": positive("metres"),
         "coarse_cell_m": positive("metres"),
@@ -230,6 +234,17 @@ class LearnedConfig(Checked):
     """Edge feature (after the predicted gain where both are read, for a policy trained with it): robot i's
     predicted shortcut to cluster k, how much shorter its path is through predicted free space (known free
     cells and unknown ones predicted free) than through known free space, metres / ``distance_scale_m``."""
+    use_plan_regret: bool = False
+    """Edge feature (after the predicted ones, for a policy trained with it): how much the team plan's makespan
+    grows when robot i heads for cluster k first (``TeamPlan.first_regret``), metres / ``distance_scale_m``."""
+    use_plan_position: bool = False
+    """Edge feature (after the plan's regret where both are read): 1 / (1 + p) where cluster k is the p-th
+    (from 0) on robot i's route of the team plan, 0 where it is on another robot's route or none."""
+
+    @property
+    def reads_plan(self) -> bool:
+        """The network reads the team plan (its regret or its routes)."""
+        return self.use_plan_regret or self.use_plan_position
 
     @property
     def reads_prediction(self) -> bool:

@@ -15,6 +15,7 @@ ours compiled first). A decision has milliseconds, so the small heuristic it is.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numba as nb
 import numpy as np
@@ -23,11 +24,20 @@ from numpy.typing import NDArray
 from mrexplore.config import GlobalPlanningConfig
 from mrexplore.global_planning.classical import utility_cost
 from mrexplore.global_planning.hungarian import match_min_cost
-from mrexplore.global_planning.learned.policy import LearnedPlanner
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 from mrexplore.types import StateGrid
 
-__all__ = ["TeamPlan", "plan_routes", "route_costs", "TeamPlanPlanner", "PlanCostPlanner"]
+
+class HungarianCost(Protocol):
+    """A planner whose deterministic decisions match robots to clusters at a cost others may add to (the
+    learned planner's :meth:`~mrexplore.global_planning.learned.policy.LearnedPlanner.cost`)."""
+
+    def begin(self, state: StateGrid, resolution_m: float) -> None: ...
+
+    def cost(self, problem: AssignmentProblem) -> NDArray[np.float64]: ...
+
+
+__all__ = ["TeamPlan", "plan_routes", "route_costs", "TeamPlanPlanner", "PlanCostPlanner", "HungarianCost"]
 
 _EPS = 1e-9
 
@@ -481,7 +491,7 @@ class PlanCostPlanner:
     (:attr:`TeamPlan.first_regret`). ``base``: the learned planner, whose deterministic cost is added to, or
     None (explore_lite's utility cost)."""
 
-    base: LearnedPlanner | None
+    base: HungarianCost | None
     cfg: GlobalPlanningConfig = field(default_factory=GlobalPlanningConfig)
     name: str = "plan-cost"
     planner: TeamPlanPlanner = field(init=False)

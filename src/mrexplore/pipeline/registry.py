@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig
+from mrexplore.config import CoScanConfig, GlobalPlanningConfig, LocalPlanningConfig, PreprocessConfig, SimConfig
 from mrexplore.types import MrExploreError
 
 if TYPE_CHECKING:
@@ -54,6 +54,9 @@ class PipelineConfigs:
     predictor: str | None = None
     """The map predictor of the predictive strategies: a file written by ``mrexplore train --target predictor``,
     ``none`` (every unknown cell free) or None (the shipped one)."""
+    sim: SimConfig = field(default_factory=SimConfig)
+    """The robots' sensor and motion, for a strategy that simulates ahead (``hier-search``; a mission gives its
+    own through :meth:`~mrexplore.pipeline.base.ExplorationPipeline.prepare`)."""
 
 
 Factory = Callable[[PipelineConfigs, "str | None"], "ExplorationPipeline"]
@@ -146,13 +149,15 @@ def make_strategy(
     policy: str | None = None,
     coscan_cfg: CoScanConfig | None = None,
     predictor: str | None = None,
+    sim_cfg: SimConfig | None = None,
 ) -> ExplorationPipeline:
     """The pipeline called ``name``; unknown names raise a one-line error listing the choices.
 
     ``local=False`` (or a ``-nolocal`` suffix on the name) removes the local layer: robots go to cluster
     centres, for ablations; the pipeline's name then carries the suffix. ``policy`` is the weights file
     of a learned strategy, or ``KIND=FILE`` pairs (:func:`policy_for`; None: the policy shipped in the
-    package); ``coscan_cfg`` sets CoScan-2D's task sampling and clustering.
+    package); ``coscan_cfg`` sets CoScan-2D's task sampling and clustering; ``sim_cfg`` the robots' sensor and
+    motion a strategy that simulates ahead assumes.
     """
     spec = strategy_spec(name)
     local = local and name == spec.name
@@ -162,6 +167,7 @@ def make_strategy(
         local_cfg or LocalPlanningConfig(),
         coscan_cfg or CoScanConfig(),
         predictor,
+        sim_cfg or SimConfig(),
     )
     pipeline = _factory(spec)(cfgs, policy_for(spec.name, policy))
     if not local and pipeline.local is not None:
@@ -184,6 +190,7 @@ def strategy_for_run(
         policy=policy,
         coscan_cfg=run.coscan,
         predictor=predictor,
+        sim_cfg=run.sim,
     )
 
 
@@ -195,6 +202,8 @@ register_strategy("hier-predict-heuristic", _SHIPPED + "hier_predict_heuristic",
 register_strategy("hier-predict", _SHIPPED + "hier_predict", policy_kind="hier", predictive=True)
 register_strategy("hier-plan", _SHIPPED + "hier_plan", policy_kind="hier")
 register_strategy("team-plan", _SHIPPED + "team_plan")
+# The search runs missions ahead: its factory lives in the mission layer, named here by its path only.
+register_strategy("hier-search", "mrexplore.mission.search:hier_search", policy_kind="hier")
 register_strategy("nearest", _SHIPPED + "nearest")
 register_strategy("utility", _SHIPPED + "utility")
 register_strategy("coscan", _SHIPPED + "coscan")

@@ -6,9 +6,13 @@ import numpy as np
 import pytest
 
 from mrexplore.config import GlobalPlanningConfig, LearnedConfig
-from mrexplore.global_planning.learned.features import graph_inputs
+from mrexplore.global_planning.learned.features import edge_feature_count, graph_inputs, route_positions
+from mrexplore.global_planning.learned.policy import LearnedPlanner
 from mrexplore.global_planning.protocol import AssignmentProblem
+from mrexplore.global_planning.team_plan import TeamPlanPlanner
 from mrexplore.preprocessing.clustering import Clusters
+from mrexplore.training.checkpoint import VALUE_INPUTS
+from mrexplore.training.hier_net import MultiGraphNet
 
 
 def _problem(current: list[int] | None = None) -> AssignmentProblem:
@@ -73,3 +77,27 @@ def test_a_policy_that_reads_the_predicted_shortcut_gets_it_per_pair_after_the_g
         assert g.edges[..., at].tolist() == [[0.0, 3.0, 10.0], [1.0, 0.0, 0.0]]  # per robot, clipped at 10
     with pytest.raises(ValueError, match=r"needs one per robot and cluster \(2, 3\), got None"):
         graph_inputs(_problem(), LearnedConfig(use_predicted_path=True), GlobalPlanningConfig())
+
+
+def test_a_policy_that_reads_the_team_plan_gets_its_regret_and_route_position_last() -> None:
+    regret = np.array([[0.0, 4.0, np.inf], [2.0, 0.0, 100.0]])  # metres; inf: the pair is unreachable
+    position = route_positions([np.array([2, 0]), np.array([1])], 3)
+    assert position.tolist() == [[0.5, 0.0, 1.0], [0.0, 1.0, 0.0]]
+    cfg = LearnedConfig(distance_scale_m=2.0, use_predicted_gain=True, use_plan_regret=True, use_plan_position=True)
+    g = graph_inputs(_problem(), cfg, GlobalPlanningConfig(), np.zeros(3), None, regret, position)
+    assert g.edges.shape == (2, 3, 8) and edge_feature_count(cfg) == 8
+    assert g.edges[..., 6].tolist() == [[0.0, 2.0, 10.0], [1.0, 0.0, 10.0]]  # regret / 2 m, clipped at 10
+    assert g.edges[..., 7].tolist() == position.tolist()
+    with pytest.raises(ValueError, match=r"^a network that reads the plan's position needs one per robot and"):
+        graph_inputs(_problem(), LearnedConfig(use_plan_position=True), GlobalPlanningConfig())
+
+
+def test_the_learned_planner_feeds_the_team_plan_it_makes() -> None:
+    problem = _problem()
+    cfg = LearnedConfig(use_plan_regret=True, use_plan_position=True)
+    planner = LearnedPlanner(MultiGraphNet(cfg, VALUE_INPUTS).eval())
+    plan = TeamPlanPlanner(GlobalPlanningConfig()).plan(problem)
+    edges = planner.inputs(problem).edges
+    regret = np.where(np.isfinite(plan.first_regret), plan.first_regret / cfg.distance_scale_m, 10.0)
+    assert edges[..., 5] == pytest.approx(np.minimum(regret, 10.0))
+    assert edges[..., 6].tolist() == route_positions(plan.routes, 3).tolist()

@@ -11,7 +11,15 @@ from mrexplore.config import GlobalPlanningConfig, LearnedConfig
 from mrexplore.global_planning.classical import utility_cost
 from mrexplore.global_planning.protocol import AssignmentProblem
 
-__all__ = ["GraphInputs", "graph_inputs", "edge_feature_count", "EDGE_FEATURES", "ROBOT_FEATURES", "CLUSTER_FEATURES"]
+__all__ = [
+    "GraphInputs",
+    "graph_inputs",
+    "edge_feature_count",
+    "route_positions",
+    "EDGE_FEATURES",
+    "ROBOT_FEATURES",
+    "CLUSTER_FEATURES",
+]
 
 ROBOT_FEATURES = 3
 """x, y (metres from the team's centroid / distance scale), label 1 (paper: s_ri = (x, y, label))."""
@@ -21,7 +29,8 @@ EDGE_FEATURES = 5
 """d_ik, g_ik (paper eq. 7's f_edge inputs), advantage, current goal, isolation (switchable, see
 :class:`~mrexplore.config.LearnedConfig`); a switched-off feature is zero. A policy trained with
 ``use_predicted_gain`` reads the predicted gain next, one trained with ``use_predicted_path`` the predicted
-shortcut after it (:func:`edge_feature_count`)."""
+shortcut after it, then the team plan's regret and route position where trained with them
+(:func:`edge_feature_count`)."""
 _FAR = 10.0
 """Normalised distances are clipped to [-_FAR, _FAR] (unreachable pairs are masked anyway)."""
 
@@ -60,9 +69,29 @@ class GraphInputs:
 
 
 def edge_feature_count(cfg: LearnedConfig) -> int:
-    """Edge features of a network with ``cfg``: :data:`EDGE_FEATURES`, then the predicted gain and the
-    predicted shortcut where used."""
-    return EDGE_FEATURES + int(cfg.use_predicted_gain) + int(cfg.use_predicted_path)
+    """Edge features of a network with ``cfg``: :data:`EDGE_FEATURES`, then the predicted gain, the
+    predicted shortcut, the plan's regret and the plan's route position where used."""
+    return (
+        EDGE_FEATURES
+        + int(cfg.use_predicted_gain)
+        + int(cfg.use_predicted_path)
+        + int(cfg.use_plan_regret)
+        + int(cfg.use_plan_position)
+    )
+
+
+def route_positions(routes: list[NDArray[np.int64]], n_clusters: int) -> NDArray[np.float64]:
+    """``(R, C)`` 1 / (1 + p) where cluster k is the p-th (from 0) on robot i's route, 0 elsewhere.
+
+    Examples
+    --------
+    >>> route_positions([np.array([2, 0]), np.array([], np.int64)], 3).tolist()
+    [[0.5, 0.0, 1.0], [0.0, 0.0, 0.0]]
+    """
+    out = np.zeros((len(routes), n_clusters))
+    for i, route in enumerate(routes):
+        out[i, np.asarray(route, dtype=np.int64)] = 1.0 / (1.0 + np.arange(len(route)))
+    return out
 
 
 def graph_inputs(
@@ -71,10 +100,14 @@ def graph_inputs(
     heuristic: GlobalPlanningConfig,
     gain_m2: NDArray[np.float64] | None = None,
     shortcut_m: NDArray[np.float64] | None = None,
+    plan_regret_m: NDArray[np.float64] | None = None,
+    plan_position: NDArray[np.float64] | None = None,
 ) -> GraphInputs:
     """Nodes, edges and masks of one decision, every distance in metres divided by ``cfg.distance_scale_m``;
     ``gain_m2`` ``(n_clusters,)``: the predicted gain of each cluster, ``shortcut_m`` ``(n_robots,
-    n_clusters)``: each robot's predicted shortcut to each cluster (each needed where ``cfg`` uses it).
+    n_clusters)``: each robot's predicted shortcut to each cluster, ``plan_regret_m`` and ``plan_position``
+    ``(n_robots, n_clusters)``: the team plan's regret and :func:`route_positions` (each needed where ``cfg``
+    uses it).
 
     Examples
     --------
@@ -135,6 +168,17 @@ def graph_inputs(
             raise ValueError(f"a network that reads the predicted shortcut needs {need}, got {shortcut_m!r}")
         at = EDGE_FEATURES + int(cfg.use_predicted_gain)
         edges[..., at] = np.minimum(np.asarray(shortcut_m) / ds, _FAR)
+    at = EDGE_FEATURES + int(cfg.use_predicted_gain) + int(cfg.use_predicted_path)
+    for use, value, what in (
+        (cfg.use_plan_regret, plan_regret_m, "regret"),
+        (cfg.use_plan_position, plan_position, "position"),
+    ):
+        if use:
+            if value is None or np.shape(value) != (R, C):
+                raise ValueError(f"a network that reads the plan's {what} needs one per robot and cluster ({R}, {C})")
+            v = np.asarray(value, dtype=np.float64)
+            edges[..., at] = np.minimum(np.where(np.isfinite(v), v, _FAR * ds) / ds, _FAR) if what == "regret" else v
+            at += 1
     cost = utility_cost(problem, heuristic)
     base = np.where(reachable, -cost / cfg.base_scale, 0.0).astype(np.float32)
     return GraphInputs(robots, clusters, edges, reachable, base)

@@ -17,9 +17,10 @@ from numpy.typing import NDArray
 from mrexplore.config import GlobalPlanningConfig, LearnedConfig
 from mrexplore.global_planning.classical import utility_cost
 from mrexplore.global_planning.hungarian import match_min_cost
-from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs
+from mrexplore.global_planning.learned.features import GraphInputs, graph_inputs, route_positions
 from mrexplore.global_planning.predictive import PredictionAhead, predicted_cost, predicted_terms
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
+from mrexplore.global_planning.team_plan import TeamPlanPlanner
 from mrexplore.prediction.network import MapPredictor
 from mrexplore.types import StateGrid
 
@@ -143,6 +144,11 @@ class LearnedPlanner:
     strategies set it from :attr:`~mrexplore.config.GlobalPlanningConfig.learned_min_robots`; sampling for
     training always adds it)."""
     ahead: PredictionAhead = field(default_factory=PredictionAhead, init=False, repr=False, compare=False)
+    _plan: TeamPlanPlanner = field(init=False, repr=False, compare=False)
+    """The team plan of a policy that reads it (``use_plan_regret``, ``use_plan_position``)."""
+
+    def __post_init__(self) -> None:
+        self._plan = TeamPlanPlanner(self.heuristic)
 
     def begin(self, state: StateGrid, resolution_m: float) -> None:
         """Start predicting ``state``, the grid of the problem that :meth:`assign` will get next (where this
@@ -164,7 +170,13 @@ class LearnedPlanner:
             terms = predicted_terms(self.predictor, problem, self.heuristic, shortcuts, self.ahead)
         gains = terms.gain_m2 if terms is not None and ncfg.use_predicted_gain else None
         paths = terms.shortcut_m if terms is not None and ncfg.use_predicted_path else None
-        g = graph_inputs(problem, ncfg, self.heuristic, gains, paths)
+        regret = position = None
+        if ncfg.reads_plan and problem.n_clusters:
+            plan = self._plan.plan(problem)
+            regret, position = plan.first_regret, route_positions(plan.routes, problem.n_clusters)
+        elif ncfg.reads_plan:
+            regret = position = np.zeros((problem.n_robots, 0))
+        g = graph_inputs(problem, ncfg, self.heuristic, gains, paths, regret, position)
         cost = utility_cost(problem, self.heuristic)
         if self.gain_cost:
             assert terms is not None
