@@ -114,7 +114,8 @@ class RolloutSearch:
     sim_cfg: SimConfig = field(default_factory=SimConfig)
     horizon_steps: int = 400
     replan_every_steps: int = 25
-    _plan: TeamPlanPlanner = field(default_factory=TeamPlanPlanner, repr=False)
+    plan: TeamPlanPlanner = field(default_factory=TeamPlanPlanner, repr=False)
+    """The team plan whose makespan estimates what a rollout cut at the horizon still needs."""
 
     def scores(self, problem: AssignmentProblem, candidates: list[NDArray[np.int64]]) -> NDArray[np.float64]:
         """Minus the steps each candidate's rollout takes until no frontier is left; a rollout still running at
@@ -148,7 +149,7 @@ class RolloutSearch:
         end = m.pose()
         if end is None or end.n_clusters == 0:
             return 0.0
-        return self._plan.plan(end).makespan / self.sim_cfg.motion.step_m
+        return self.plan.plan(end).makespan / self.sim_cfg.motion.step_m
 
 
 @dataclass
@@ -203,7 +204,11 @@ class SearchPipeline(ExplorationPipeline):
         planner = self.planner
         assert isinstance(planner, SearchPlanner)
         if planner.search is None:
-            planner.search = RolloutSearch(self._continuation(), horizon_steps=planner.cfg.search_horizon_steps)
+            planner.search = RolloutSearch(
+                self._continuation(),
+                horizon_steps=planner.cfg.search_horizon_steps,
+                plan=TeamPlanPlanner(planner.cfg),
+            )
         return planner.search
 
     def _continuation(self) -> ExplorationPipeline:
