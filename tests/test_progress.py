@@ -49,12 +49,17 @@ def travel_bound_steps(truth, starts_rc: np.ndarray, cfg: SimConfig) -> int:
     return math.ceil(2 * 2 * reach / cfg.motion.step_m)
 
 
+SEARCH_TEAMS = (3, 8)
+"""The run-time search decides by four rollouts a decision, some 20 times the others' time: it runs two team
+sizes here (the pipeline it drives, hier-plan's, runs them all)."""
+
+
 def _episodes() -> list[tuple[str, str, int, float]]:
     maps = list(MAPS) + ([str(SHARED_MAPS / m) for m in DEV_MAPS] if SHARED_MAPS.is_dir() else [])
     out = []
     for m in maps:
         for strategy in strategy_names():
-            for n in TEAMS:
+            for n in SEARCH_TEAMS if strategy == "hier-search" else TEAMS:
                 out.append((m, strategy, n, 8.0 if n == 1 else 6.0))  # lone robots with the 8 m sensor
     return out
 

@@ -100,8 +100,8 @@ class GlobalPlanningConfig(Checked):
     per metre by which heading there first lengthens the team plan's makespan. 0.3, chosen on 32 validation
     maps of training at 2, 3 and 8 robots against 1 and 3 (docs/learned.md, "A team plan")."""
     search_horizon_steps: int = 400
-    """``hier-search``: each candidate's rollout runs at most this many simulation steps (a rollout that leaves
-    frontiers at its end scores the whole budget)."""
+    """``hier-search``: each candidate's rollout runs at most this many simulation steps (a rollout still
+    running then adds the team plan's makespan over the clusters left to its steps)."""
     far_above_cells: int = 2_000_000
     """Once the known passable cells' bounding box holds more cells than this, robot distances are exact
     only within ``exact_radius_m`` and estimated beyond it on a grid of ``coarse_cell_m`` blocks

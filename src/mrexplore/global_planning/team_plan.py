@@ -27,6 +27,8 @@ from mrexplore.global_planning.hungarian import match_min_cost
 from mrexplore.global_planning.protocol import UNASSIGNED, Assignment, AssignmentProblem
 from mrexplore.types import StateGrid
 
+__all__ = ["TeamPlan", "plan_routes", "route_costs", "TeamPlanPlanner", "PlanCostPlanner", "HungarianCost"]
+
 
 class HungarianCost(Protocol):
     """A planner whose deterministic decisions match robots to clusters at a cost others may add to (the
@@ -36,8 +38,6 @@ class HungarianCost(Protocol):
 
     def cost(self, problem: AssignmentProblem) -> NDArray[np.float64]: ...
 
-
-__all__ = ["TeamPlan", "plan_routes", "route_costs", "TeamPlanPlanner", "PlanCostPlanner", "HungarianCost"]
 
 _EPS = 1e-9
 
