@@ -32,6 +32,7 @@ from mrexplore.maps.ground_truth import GroundTruthMap
 from mrexplore.mission.loop import Mission, MissionSpec
 from mrexplore.pipeline.base import ExplorationPipeline
 from mrexplore.pipeline.registry import PipelineConfigs
+from mrexplore.pipeline.strategies import hier
 from mrexplore.sim.belief import logit
 from mrexplore.sim.world import ExplorationSim
 from mrexplore.types import CellState, StateGrid
@@ -234,8 +235,6 @@ class SearchPipeline(ExplorationPipeline):
 def hier_search(c: PipelineConfigs, policy: str | None) -> ExplorationPipeline:
     """``hier-search``: hier's pipeline, its assignment searched among few candidates by rollouts in the
     centre's known world."""
-    from mrexplore.pipeline.strategies import hier
-
     base = hier(c, policy)
     learned = base.planner
     assert isinstance(learned, LearnedPlanner)
