@@ -41,10 +41,11 @@ from mrexplore.bench.runner import size_class
 from mrexplore.config import GlobalPlanningConfig, MapConfig, MissionConfig, SimConfig, TrainConfig
 from mrexplore.global_planning.classical import UtilityPlanner
 from mrexplore.global_planning.learned.policy import LearnedPlanner
-from mrexplore.global_planning.protocol import Assignment, AssignmentProblem, GlobalPlanner
+from mrexplore.global_planning.protocol import Assignment, AssignmentProblem
 from mrexplore.global_planning.team_plan import PlanCostPlanner, TeamPlanPlanner
 from mrexplore.maps.loaders import load_map
 from mrexplore.mission import Mission, MissionSpec
+from mrexplore.mission.search import search_candidates
 from mrexplore.pipeline import make_strategy
 from mrexplore.prediction.network import load_predictor
 from mrexplore.runtime.example_maps import maps_dir
@@ -64,17 +65,12 @@ SEARCH = "search"
 run forward with hier deciding (``--baselines search,...``; ``--world known`` only)."""
 
 
-def search_candidates(problem: AssignmentProblem, learned: LearnedPlanner) -> list[NDArray[np.int64]]:
+def candidates_of(problem: AssignmentProblem, learned: LearnedPlanner) -> list[NDArray[np.int64]]:
     """Distinct assignments: the learned planner's first (ties go to it), then the team plan's, the learned
     cost under the plan's and utility's."""
     cfg = GlobalPlanningConfig()
     plan, plan_cost = TeamPlanPlanner(cfg), PlanCostPlanner(learned, cfg)
-    planners: tuple[GlobalPlanner, ...] = (learned, plan, plan_cost, UtilityPlanner(cfg))
-    unique: dict[tuple[int, ...], NDArray[np.int64]] = {}
-    for planner in planners:
-        a = planner.assign(problem).cluster_of_robot
-        unique.setdefault(tuple(int(v) for v in a), np.asarray(a, dtype=np.int64))
-    return list(unique.values())
+    return search_candidates(problem, (learned, plan, plan_cost, UtilityPlanner(cfg)))
 
 
 def episode(args: tuple[str, int, int, str, str, str | None]) -> dict[str, object]:
@@ -97,7 +93,7 @@ def episode(args: tuple[str, int, int, str, str, str | None]) -> dict[str, objec
         if problem is None:
             break
         assert isinstance(pipeline.planner, LearnedPlanner)
-        cands = search_candidates(problem, pipeline.planner)
+        cands = candidates_of(problem, pipeline.planner)
         choice = Assignment(cands[0])
         if len(cands) > 1:
             returns = known_world_returns(m, cands, cfg.horizon_steps, pipeline.planner)

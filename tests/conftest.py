@@ -56,6 +56,25 @@ def truth_map(text: str, resolution_m: float = 0.05, name: str = "ascii") -> Gro
     return GroundTruthMap(occ, GridFrame(occ.shape[0], occ.shape[1], resolution_m), name)
 
 
+def posed_mission(map_spec: str, strategy: str, decisions: int, seed: int):
+    """A 3-robot mission at 0.1 m on ``map_spec`` after ``decisions`` decisions of ``strategy``, its next one
+    posed (:meth:`~mrexplore.mission.Mission.pose`); returns the mission and the posed problem."""
+    from mrexplore.config import MapConfig, SimConfig
+    from mrexplore.maps.loaders import load_map
+    from mrexplore.mission import Mission, MissionSpec
+    from mrexplore.pipeline import make_strategy
+
+    truth = load_map(map_spec, MapConfig(resolution_m=0.1))
+    m = Mission(MissionSpec(truth, make_strategy(strategy), SimConfig(robots=3), seed=seed), progress=False)
+    for _ in range(decisions):
+        assert m.advance()
+        m.decide()
+    assert m.advance()
+    problem = m.pose()
+    assert problem is not None
+    return m, problem
+
+
 def _rclpy_problem() -> str | None:
     from mrexplore.ros2.loopback import rclpy_problem
 

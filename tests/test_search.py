@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from conftest import state_grid
+from conftest import posed_mission, state_grid
 
 from mrexplore.config import MapConfig, MissionConfig, SensorConfig, SimConfig
 from mrexplore.global_planning.protocol import AssignmentProblem
@@ -44,14 +44,7 @@ def test_the_rollout_world_keeps_only_what_the_centre_knows_free() -> None:
 def test_a_rollout_starts_from_the_centres_grid_and_problem() -> None:
     # A real mission's centre grid after a few decisions: the rollout's robots, seeded with it, send what
     # rebuilds the same grid, and its first problem has the same clusters.
-    truth = load_map("generated:3", MapConfig(resolution_m=0.1))
-    m = Mission(MissionSpec(truth, make_strategy("hier"), SimConfig(robots=3), seed=0), progress=False)
-    for _ in range(4):
-        assert m.advance()
-        m.decide()
-    assert m.advance()
-    problem = m.pose()
-    assert problem is not None
+    _, problem = posed_mission("generated:3", "hier", 4, seed=0)
     world = rollout_world(problem.state, problem.resolution_m, problem.robots_rc)
     spec = MissionSpec(world, make_strategy("hier"), SimConfig(robots=3), starts_rc=problem.robots_rc)
     rollout = Mission(spec, progress=False)

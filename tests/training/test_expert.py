@@ -6,24 +6,16 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+from conftest import posed_mission
 
-from mrexplore.config import MapConfig, SimConfig
 from mrexplore.global_planning.protocol import UNASSIGNED
-from mrexplore.maps.loaders import load_map
-from mrexplore.mission import Mission, MissionSpec
+from mrexplore.mission import Mission
 from mrexplore.pipeline import make_strategy
 from mrexplore.training.expert import known_world_returns
 
 
 def _posed_mission() -> Mission:
-    truth = load_map("generated:2", MapConfig(resolution_m=0.1))
-    m = Mission(MissionSpec(truth, make_strategy("hier-heuristic"), SimConfig(robots=3), seed=4), progress=False)
-    for _ in range(3):
-        assert m.advance()
-        m.decide()
-    assert m.advance()
-    assert m.pose() is not None
-    return m
+    return posed_mission("generated:2", "hier-heuristic", 3, seed=4)[0]
 
 
 def test_known_world_returns_ignore_the_unseen_and_leave_the_mission_as_it_was() -> None:

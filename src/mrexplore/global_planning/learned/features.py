@@ -94,6 +94,13 @@ def route_positions(routes: list[NDArray[np.int64]], n_clusters: int) -> NDArray
     return out
 
 
+def _per_pair(value: NDArray[np.float64] | None, what: str, R: int, C: int) -> NDArray[np.float64]:
+    """The plan's ``what`` as a ``(R, C)`` array; a one-line error where it is missing or of another shape."""
+    if value is None or np.shape(value) != (R, C):
+        raise ValueError(f"a network that reads the plan's {what} needs one per robot and cluster ({R}, {C})")
+    return np.asarray(value, dtype=np.float64)
+
+
 def graph_inputs(
     problem: AssignmentProblem,
     cfg: LearnedConfig,
@@ -169,16 +176,12 @@ def graph_inputs(
         at = EDGE_FEATURES + int(cfg.use_predicted_gain)
         edges[..., at] = np.minimum(np.asarray(shortcut_m) / ds, _FAR)
     at = EDGE_FEATURES + int(cfg.use_predicted_gain) + int(cfg.use_predicted_path)
-    for use, value, what in (
-        (cfg.use_plan_regret, plan_regret_m, "regret"),
-        (cfg.use_plan_position, plan_position, "position"),
-    ):
-        if use:
-            if value is None or np.shape(value) != (R, C):
-                raise ValueError(f"a network that reads the plan's {what} needs one per robot and cluster ({R}, {C})")
-            v = np.asarray(value, dtype=np.float64)
-            edges[..., at] = np.minimum(np.where(np.isfinite(v), v, _FAR * ds) / ds, _FAR) if what == "regret" else v
-            at += 1
+    if cfg.use_plan_regret:
+        regret = _per_pair(plan_regret_m, "regret", R, C)
+        edges[..., at] = np.where(np.isfinite(regret), np.minimum(regret / ds, _FAR), _FAR)
+        at += 1
+    if cfg.use_plan_position:
+        edges[..., at] = _per_pair(plan_position, "position", R, C)
     cost = utility_cost(problem, heuristic)
     base = np.where(reachable, -cost / cfg.base_scale, 0.0).astype(np.float32)
     return GraphInputs(robots, clusters, edges, reachable, base)
